@@ -1,0 +1,11 @@
+//! `coherent-simd`: the lane trait and its backends (paper sections 3-6: every stage of the
+//! renderer works on packets of rays under masks).
+//!
+//! Kernels are written once, generic over [`Lanes`], and run on any backend through
+//! [`Backend::run`]. The backends are sibling modules; [`dispatch`] is the only place that
+//! names them all.
+
+pub mod lanes;
+pub mod scalar;
+
+pub use lanes::{Lanes, MAX_LANES, SimdF32, SimdI32, SimdMask};

@@ -1,0 +1,4 @@
+//! `coherent`: coherent (SIMD packet) physically accurate ray tracing after Adinetz et al.,
+//! Graphicon 2005.
+
+pub use coherent_simd as simd;
