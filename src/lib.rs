@@ -2,3 +2,7 @@
 //! Graphicon 2005.
 
 pub use coherent_simd as simd;
+
+pub mod approx;
+pub mod bdf;
+pub mod tabulated;
