@@ -6,3 +6,4 @@ pub use coherent_simd as simd;
 pub mod approx;
 pub mod bdf;
 pub mod tabulated;
+pub mod texture;
