@@ -9,3 +9,13 @@ pub mod lanes;
 pub mod scalar;
 
 pub use lanes::{Lanes, MAX_LANES, SimdF32, SimdI32, SimdMask};
+#[cfg(all(feature = "pulp", target_arch = "x86_64"))]
+pub mod pulp;
+#[cfg(all(feature = "sse", target_arch = "x86_64"))]
+pub mod sse;
+#[cfg(feature = "wide")]
+pub mod wide;
+
+pub mod dispatch;
+
+pub use dispatch::{Backend, BackendError, Kernel};
