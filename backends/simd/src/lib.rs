@@ -7,8 +7,10 @@
 
 pub mod lanes;
 pub mod scalar;
+pub mod vec3;
 
 pub use lanes::{Lanes, MAX_LANES, SimdF32, SimdI32, SimdMask};
+pub use vec3::{Rgbs, Vec3s};
 #[cfg(all(feature = "pulp", target_arch = "x86_64"))]
 pub mod pulp;
 #[cfg(all(feature = "sse", target_arch = "x86_64"))]
