@@ -5,8 +5,10 @@
 //! [`Backend::run`]. The backends are sibling modules; [`dispatch`] is the only place that
 //! names them all.
 
+pub mod approx;
 pub mod lanes;
 pub mod scalar;
+pub mod slices;
 pub mod vec3;
 
 pub use lanes::{Lanes, MAX_LANES, SimdF32, SimdI32, SimdMask};
