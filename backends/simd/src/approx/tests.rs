@@ -66,7 +66,7 @@ fn worst(f: Approx, a: &[f32], b: &[f32], got: &[f32]) -> (f64, f32, f32) {
         } else {
             ratio
         };
-        if !(ratio <= worst.0) {
+        if ratio.is_nan() || ratio > worst.0 {
             worst = (ratio, a[i], b[i]);
         }
     }

@@ -1,6 +1,9 @@
 //! Approximate inverse trigonometry for BDF and goniodiagram angles (sections 4.2 and 5) and
 //! the spot-light cosine (section 5).
 
+// The coefficients are quoted as Abramowitz & Stegun print them.
+#![allow(clippy::excessive_precision)]
+
 use core::f32::consts::{FRAC_PI_2, PI};
 
 use crate::lanes::{Lanes, SimdF32, SimdI32, SimdMask};
