@@ -63,6 +63,8 @@ fn worst(f: Approx, a: &[f32], b: &[f32], got: &[f32]) -> (f64, f32, f32) {
         };
         let ratio = if got[i].is_nan() {
             f64::INFINITY
+        } else if err == 0.0 {
+            0.0 // exact, also where the relative error is 0/0
         } else {
             ratio
         };
