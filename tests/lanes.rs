@@ -7,6 +7,8 @@
 //! `mul_add` against the fused and the unfused result. Backends this CPU cannot run are
 //! skipped with their reason printed.
 
+#![allow(clippy::needless_range_loop)] // lane-indexed comparisons read best as index loops
+
 use coherent::simd::lanes::{RECIP_REL_ERROR, RSQRT_REL_ERROR};
 use coherent::simd::{Backend, Kernel, Lanes, SimdF32, SimdI32, SimdMask};
 use proptest::prelude::*;
