@@ -5,5 +5,6 @@ pub use coherent_simd as simd;
 
 pub mod approx;
 pub mod bdf;
+pub mod material;
 pub mod tabulated;
 pub mod texture;

@@ -11,7 +11,7 @@ pub mod table;
 pub mod tabulate;
 
 pub use analytic::{Analytic, Ggx, Ward};
-pub use angles::{Frames, Vec3Lanes};
+pub use angles::Frames;
 pub use error::{BdfError, BdfProblem};
 pub use table::{AnisotropicBdf, Bdf, IsotropicBdf, Symmetry};
 pub use tabulate::{PAPER_ANISOTROPIC_SHAPE, tabulate_anisotropic, tabulate_isotropic};

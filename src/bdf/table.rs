@@ -11,9 +11,9 @@
 
 use std::f32::consts::{FRAC_PI_2, PI};
 
-use coherent_simd::{Lanes, SimdF32, SimdMask};
+use coherent_simd::{Lanes, Rgbs, SimdF32, Vec3s};
 
-use super::angles::{self, Vec3Lanes};
+use super::angles;
 use super::error::BdfProblem;
 use crate::tabulated::{Axis, Grid};
 
@@ -64,19 +64,14 @@ fn check_values(values: &[f32]) -> Result<(), BdfProblem> {
 
 /// Zero where either direction is at or below the surface.
 #[inline(always)]
-fn above<L: Lanes>(l: L, wi: &Vec3Lanes<L>, wo: &Vec3Lanes<L>) -> L::Mask {
+fn above<L: Lanes>(l: L, wi: &Vec3s<L>, wo: &Vec3s<L>) -> L::Mask {
     let zero = l.splat(0.0);
-    wi[2].gt(zero) & wo[2].gt(zero)
+    wi.z.gt(zero) & wo.z.gt(zero)
 }
 
 /// Interpolates up to three channels and spreads a single channel to RGB.
 #[inline(always)]
-fn rgb<L: Lanes, const D: usize>(
-    l: L,
-    grid: &Grid<D>,
-    x: [L::F32s; D],
-    keep: L::Mask,
-) -> [L::F32s; 3] {
+fn rgb<L: Lanes, const D: usize>(l: L, grid: &Grid<D>, x: [L::F32s; D], keep: L::Mask) -> Rgbs<L> {
     let cells = grid.locate(l, x);
     let mut out = [l.splat(0.0); 3];
     grid.interpolate(l, &cells, &mut out);
@@ -84,8 +79,7 @@ fn rgb<L: Lanes, const D: usize>(
         out[1] = out[0];
         out[2] = out[0];
     }
-    let zero = l.splat(0.0);
-    out.map(|v| keep.select(v, zero))
+    Rgbs::select(keep, Rgbs::new(out[0], out[1], out[2]), Rgbs::zero(l))
 }
 
 /// An isotropic BDF over `(theta_i, theta_o, delta_phi)`.
@@ -113,7 +107,7 @@ impl IsotropicBdf {
 
     /// The table's coordinates for local directions.
     #[inline(always)]
-    pub fn coords<L: Lanes>(l: L, wi: &Vec3Lanes<L>, wo: &Vec3Lanes<L>) -> [L::F32s; 3] {
+    pub fn coords<L: Lanes>(l: L, wi: &Vec3s<L>, wo: &Vec3s<L>) -> [L::F32s; 3] {
         [
             angles::theta(l, wi),
             angles::theta(l, wo),
@@ -123,7 +117,7 @@ impl IsotropicBdf {
 
     /// The BDF (RGB) for local unit directions `wi` (to the light) and `wo` (to the viewer).
     #[inline(always)]
-    pub fn eval<L: Lanes>(&self, l: L, wi: &Vec3Lanes<L>, wo: &Vec3Lanes<L>) -> [L::F32s; 3] {
+    pub fn eval<L: Lanes>(&self, l: L, wi: &Vec3s<L>, wo: &Vec3s<L>) -> Rgbs<L> {
         let keep = above(l, wi, wo);
         rgb(l, &self.grid, Self::coords(l, wi, wo), keep)
     }
@@ -165,7 +159,7 @@ impl AnisotropicBdf {
 
     /// The table's coordinates for local directions (after folding by the symmetry).
     #[inline(always)]
-    pub fn coords<L: Lanes>(&self, l: L, wi: &Vec3Lanes<L>, wo: &Vec3Lanes<L>) -> [L::F32s; 4] {
+    pub fn coords<L: Lanes>(&self, l: L, wi: &Vec3s<L>, wo: &Vec3s<L>) -> [L::F32s; 4] {
         let (mut wi, mut wo) = (*wi, *wo);
         if self.symmetry == Symmetry::Quadrant {
             angles::fold_quadrant(l, &mut wi, &mut wo);
@@ -180,7 +174,7 @@ impl AnisotropicBdf {
 
     /// The BDF (RGB) for local unit directions `wi` (to the light) and `wo` (to the viewer).
     #[inline(always)]
-    pub fn eval<L: Lanes>(&self, l: L, wi: &Vec3Lanes<L>, wo: &Vec3Lanes<L>) -> [L::F32s; 3] {
+    pub fn eval<L: Lanes>(&self, l: L, wi: &Vec3s<L>, wo: &Vec3s<L>) -> Rgbs<L> {
         let keep = above(l, wi, wo);
         rgb(l, &self.grid, self.coords(l, wi, wo), keep)
     }
@@ -196,7 +190,7 @@ pub enum Bdf {
 impl Bdf {
     /// The BDF (RGB) for local unit directions `wi` (to the light) and `wo` (to the viewer).
     #[inline(always)]
-    pub fn eval<L: Lanes>(&self, l: L, wi: &Vec3Lanes<L>, wo: &Vec3Lanes<L>) -> [L::F32s; 3] {
+    pub fn eval<L: Lanes>(&self, l: L, wi: &Vec3s<L>, wo: &Vec3s<L>) -> Rgbs<L> {
         match self {
             Bdf::Isotropic(b) => b.eval(l, wi, wo),
             Bdf::Anisotropic(b) => b.eval(l, wi, wo),

@@ -3,6 +3,7 @@
 
 use std::f64::consts::FRAC_PI_2;
 
+use coherent_simd::Vec3s;
 use coherent_simd::scalar::Scalar;
 use rand::{Rng, SeedableRng, rngs::StdRng};
 
@@ -30,12 +31,12 @@ fn random_dir(rng: &mut StdRng) -> [f64; 3] {
     direction(theta, phi)
 }
 
-fn to_f32(w: [f64; 3]) -> [f32; 3] {
-    w.map(|x| x as f32)
+fn to_f32(w: [f64; 3]) -> Vec3s<Scalar> {
+    Vec3s::new(w[0] as f32, w[1] as f32, w[2] as f32)
 }
 
 fn eval1(bdf: &Bdf, wi: [f64; 3], wo: [f64; 3]) -> [f32; 3] {
-    bdf.eval(Scalar, &to_f32(wi), &to_f32(wo))
+    bdf.eval(Scalar, &to_f32(wi), &to_f32(wo)).lane(0)
 }
 
 #[test]

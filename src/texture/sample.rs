@@ -6,7 +6,7 @@
 //! Texel centres are at half-integer positions: coordinate `s` on a level `w` texels wide
 //! falls between texels `floor(s w - 1/2)` and the next one.
 
-use coherent_simd::{Lanes, SimdF32, SimdMask};
+use coherent_simd::{Lanes, Rgbs, SimdF32, SimdMask};
 
 use super::pyramid::Texture;
 
@@ -95,16 +95,17 @@ impl Texture {
 
     /// Trilinear filtering at `(s, t)` and mip level `lod`: linear RGB per lane.
     #[inline(always)]
-    pub fn sample<L: Lanes>(&self, l: L, s: L::F32s, t: L::F32s, lod: L::F32s) -> [L::F32s; 3] {
+    pub fn sample<L: Lanes>(&self, l: L, s: L::F32s, t: L::F32s, lod: L::F32s) -> Rgbs<L> {
         let f = self.footprint(l, s, t, lod);
-        core::array::from_fn(|c| {
+        let [r, g, b] = core::array::from_fn(|c| {
             let plane = &self.planes[c];
             let mut sum = f.weight[0] * l.gather(plane, f.index[0]);
             for k in 1..8 {
                 sum = f.weight[k].mul_add(l.gather(plane, f.index[k]), sum);
             }
             sum
-        })
+        });
+        Rgbs::new(r, g, b)
     }
 
     /// The scalar reference of [`Texture::sample`], written directly with integer texel

@@ -51,7 +51,7 @@ fn constant_texture_samples_to_the_constant_at_every_level() {
                 rng.random_range(-3.0..3.0),
                 rng.random_range(-1.0..7.0),
             );
-            let v = tex.sample(Scalar, s, t, lod);
+            let v = tex.sample(Scalar, s, t, lod).lane(0);
             for ch in 0..3 {
                 assert!(
                     (v[ch] - c[ch]).abs() <= 1e-5 * c[ch],
@@ -140,7 +140,10 @@ fn trilinear_weights_sum_to_one_and_match_the_reference() {
             let sum: f32 = f.weight.iter().sum();
             assert!((sum - 1.0).abs() < 1e-6, "{s} {t} {lod}: {sum}");
             assert!(f.weight.iter().all(|&w| (0.0..=1.0).contains(&w)));
-            let (a, b) = (tex.sample(Scalar, s, t, lod), tex.sample1(s, t, lod));
+            let (a, b) = (
+                tex.sample(Scalar, s, t, lod).lane(0),
+                tex.sample1(s, t, lod),
+            );
             for c in 0..3 {
                 assert!(
                     (a[c] - b[c]).abs() < 1e-4 * b[c].abs().max(1.0),
@@ -170,7 +173,7 @@ fn coordinates_outside_the_unit_square_follow_the_wrap_mode() {
     for _ in 0..1000 {
         let (s, t) = (rng.random_range(0.0..1.0f32), rng.random_range(0.0..1.0f32));
         let lod = rng.random_range(0.0..2.0);
-        let base = repeat.sample(Scalar, s, t, lod);
+        let base = repeat.sample(Scalar, s, t, lod).lane(0);
         for (ds, dt) in [
             (1.0, 0.0),
             (-1.0, 0.0),
@@ -178,7 +181,7 @@ fn coordinates_outside_the_unit_square_follow_the_wrap_mode() {
             (-3.0, -1.0),
             (4.0, 5.0),
         ] {
-            let v = repeat.sample(Scalar, s + ds, t + dt, lod);
+            let v = repeat.sample(Scalar, s + ds, t + dt, lod).lane(0);
             for c in 0..3 {
                 assert!(
                     (v[c] - base[c]).abs() < 1e-3 * base[c].abs().max(1.0),
@@ -187,20 +190,20 @@ fn coordinates_outside_the_unit_square_follow_the_wrap_mode() {
             }
         }
         // Clamp: everything beyond the last texel centre reads the edge.
-        let edge = clamp.sample(Scalar, 1.0, t, 0.0);
+        let edge = clamp.sample(Scalar, 1.0, t, 0.0).lane(0);
         for far in [1.0 + s, 3.0, 1e6] {
-            close(clamp.sample(Scalar, far, t, 0.0), edge);
+            close(clamp.sample(Scalar, far, t, 0.0).lane(0), edge);
         }
-        let edge = clamp.sample(Scalar, s, 0.0, 0.0);
-        close(clamp.sample(Scalar, s, -t - 0.5, 0.0), edge);
+        let edge = clamp.sample(Scalar, s, 0.0, 0.0).lane(0);
+        close(clamp.sample(Scalar, s, -t - 0.5, 0.0).lane(0), edge);
     }
     // At level 0 and a texel centre beyond the edge, clamp reads the edge texel exactly.
     assert_eq!(
-        clamp.sample(Scalar, 2.0, -1.0, 0.0),
+        clamp.sample(Scalar, 2.0, -1.0, 0.0).lane(0),
         clamp.texel(0, w - 1, 0)
     );
     // NaN and huge coordinates stay inside the texture.
-    let v = repeat.sample(Scalar, f32::NAN, 1e30, f32::NAN);
+    let v = repeat.sample(Scalar, f32::NAN, 1e30, f32::NAN).lane(0);
     assert!(v.iter().all(|x| x.is_finite()));
 }
 
