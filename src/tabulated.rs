@@ -3,17 +3,23 @@
 //! inside the cell. Tabulated BDFs (3D and 4D) and goniodiagram lights (2D) share it.
 //!
 //! Every lane runs the same fixed number of search steps (`ceil(log2(cells))`), so the
-//! search has no branch that depends on the data: each step gathers the probed node per
-//! lane and moves the lane's lower bound with a select. The first probe is the same for
-//! every lane and is a splat instead of a gather.
+//! search has no branch that depends on the data: each step compares the probed node per
+//! lane and moves the lane's lower bound with a select. The first three levels of the
+//! search probe at most 1, 2 and 4 distinct nodes: those are kept in registers and picked
+//! with selects on the earlier steps' outcomes, so only the later steps gather (for the
+//! paper's 17 x 7 x 17 x 13 table: 1 gather in all four searches instead of 11; see
+//! `table1` in `reproduce` for what it is worth).
+//!
+//! Values are kept one plane per channel, so that the gathers of a corner's channels share
+//! their index (and, on backends without a hardware gather, its range check).
 //!
 //! Interpolation is exact at the grid nodes: the weight of a cell's upper node is clamped
 //! to `[0, 1]` with the stored reciprocal widths rounded up so that a coordinate on the
 //! last node gives exactly 1, and each lerp is `a * (1 - t) + b * t`, exact at `t = 0` and
-//! `t = 1`. Coordinates outside the axis clamp to its ends; NaN coordinates land on the
+//! `t = 1` (also when the backend fuses the multiply-add). Coordinates outside the axis clamp to its ends; NaN coordinates land on the
 //! first node (indices always stay inside the table, so inactive lanes need no care).
 
-use coherent_simd::{Lanes, SimdF32, SimdMask};
+use coherent_simd::{Lanes, SimdF32, SimdI32, SimdMask};
 use thiserror::Error;
 
 /// What is wrong with an axis or a table's shape.
@@ -50,7 +56,7 @@ pub enum TableError {
     BadChannels { channels: usize },
     #[error("value {index} is {value}, not a finite number")]
     NonFiniteValue { index: usize, value: f32 },
-    #[error("table of {values} values is too large for 32-bit lane indices")]
+    #[error("table of {values} values is too large (at most 2^24 nodes)")]
     TooLarge { values: usize },
 }
 
@@ -61,7 +67,9 @@ pub const MAX_CHANNELS: usize = 3;
 #[derive(Debug, Clone, PartialEq)]
 pub struct Axis {
     nodes: Vec<f32>,
-    /// `1 / (nodes[i + 1] - nodes[i])`, rounded up so that `width * inv >= 1` in `f32`.
+    /// `1 / (nodes[i + 1] - nodes[i])`, rounded up so that `width * inv >= 1` in `f32`;
+    /// padded with a last 0 to the length of `nodes` (so that both gathers with the same
+    /// index share their range check).
     inv_widths: Vec<f32>,
     /// The sequence of step sizes of the fixed-length binary search.
     halves: Vec<i32>,
@@ -94,7 +102,7 @@ impl Axis {
                 });
             }
         }
-        let inv_widths = nodes
+        let mut inv_widths: Vec<f32> = nodes
             .windows(2)
             .map(|w| {
                 let width = w[1] - w[0];
@@ -105,12 +113,18 @@ impl Axis {
                 inv
             })
             .collect();
+        inv_widths.push(0.0);
         let mut halves = Vec::new();
         let mut n = nodes.len() - 1;
         while n > 1 {
             let half = n / 2;
             halves.push(half as i32);
             n -= half;
+        }
+        if halves.is_empty() {
+            // One cell: a step that never moves (probing node 0, which never lies above
+            // a lane's lower bound 0) keeps the search code free of a special case.
+            halves.push(0);
         }
         Ok(Self {
             nodes,
@@ -158,20 +172,46 @@ impl Axis {
     /// N-wide binary search.
     #[inline(always)]
     pub fn locate<L: Lanes>(&self, l: L, x: L::F32s) -> Cell<L> {
+        let h = &self.halves;
+        let n = |i: i32| l.splat(self.nodes[i as usize]);
         let mut base = l.splat_i32(0);
-        let mut halves = self.halves.iter();
-        if let Some(&half) = halves.next() {
-            // Every lane probes the same node first: a splat, not a gather.
-            let hit = l.splat(self.nodes[half as usize]).le(x);
-            base = hit.select_i32(l.splat_i32(half), base);
+        // Level 1: one node for every lane.
+        let hit0 = n(h[0]).le(x);
+        base = hit0.select_i32(l.splat_i32(h[0]), base);
+        if h.len() > 1 {
+            // Level 2: two candidate nodes, picked by level 1's outcome.
+            let probe = hit0.select(n(h[0] + h[1]), n(h[1]));
+            let hit1 = probe.le(x);
+            base = hit1.select_i32(base + l.splat_i32(h[1]), base);
+            if h.len() > 2 {
+                // Level 3: four candidates.
+                let probe = hit0.select(
+                    hit1.select(n(h[0] + h[1] + h[2]), n(h[0] + h[2])),
+                    hit1.select(n(h[1] + h[2]), n(h[2])),
+                );
+                let hit2 = probe.le(x);
+                base = hit2.select_i32(base + l.splat_i32(h[2]), base);
+                // Further levels gather the probed node per lane.
+                for &half in &h[3..] {
+                    let probe = base + l.splat_i32(half);
+                    let hit = l.gather(&self.nodes, probe).le(x);
+                    base = hit.select_i32(probe, base);
+                }
+            }
         }
-        for &half in halves {
-            let probe = base + l.splat_i32(half);
-            let hit = l.gather(&self.nodes, probe).le(x);
-            base = hit.select_i32(probe, base);
-        }
-        let lower = l.gather(&self.nodes, base);
-        let inv = l.gather(&self.inv_widths, base);
+        // Coherent packets mostly share the cell: then read its node once.
+        let b0 = base.lane(0);
+        let (lower, inv) = if base.eq(l.splat_i32(b0)).all() {
+            (
+                l.splat(self.nodes[b0 as usize]),
+                l.splat(self.inv_widths[b0 as usize]),
+            )
+        } else {
+            (
+                l.gather(&self.nodes, base),
+                l.gather(&self.inv_widths, base),
+            )
+        };
         let t = ((x - lower) * inv).clamp(l.splat(0.0), l.splat(1.0));
         Cell { index: base, t }
     }
@@ -203,9 +243,14 @@ pub struct Grid<const D: usize> {
     axes: [Axis; D],
     channels: usize,
     values: Vec<f32>,
-    /// Distance in `values` between neighbours along each axis.
+    /// The same values one plane per channel: channel `c` of node `i` at
+    /// `planes[c * nodes + i]`.
+    planes: Vec<f32>,
+    /// Number of nodes.
+    nodes: usize,
+    /// Distance in nodes between neighbours along each axis.
     strides: [usize; D],
-    /// Offset in `values` of each corner of a cell, relative to its lower corner
+    /// Offset in nodes of each corner of a cell, relative to its lower corner
     /// (bit `k` of the corner number set = upper node on axis `k`).
     corner_offsets: Vec<i32>,
 }
@@ -227,14 +272,15 @@ impl<const D: usize> Grid<D> {
                 expected,
             });
         }
-        if expected > i32::MAX as usize / 2 {
+        // Node indices are computed in f32: keep them exact.
+        if expected / channels >= 1 << 24 {
             return Err(TableError::TooLarge { values: expected });
         }
         if let Some((index, &value)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             return Err(TableError::NonFiniteValue { index, value });
         }
         let mut strides = [0usize; D];
-        let mut stride = channels;
+        let mut stride = 1;
         for k in (0..D).rev() {
             strides[k] = stride;
             stride *= axes[k].len();
@@ -247,10 +293,16 @@ impl<const D: usize> Grid<D> {
                     .sum()
             })
             .collect();
+        let nodes = expected / channels;
+        let planes = (0..channels)
+            .flat_map(|c| values.iter().skip(c).step_by(channels).copied())
+            .collect();
         Ok(Self {
             axes,
             channels,
             values,
+            planes,
+            nodes,
             strides,
             corner_offsets,
         })
@@ -273,7 +325,7 @@ impl<const D: usize> Grid<D> {
 
     /// The values of the node with indices `at`.
     pub fn node(&self, at: [usize; D]) -> &[f32] {
-        let i: usize = (0..D).map(|k| at[k] * self.strides[k]).sum();
+        let i: usize = (0..D).map(|k| at[k] * self.strides[k]).sum::<usize>() * self.channels;
         &self.values[i..i + self.channels]
     }
 
@@ -287,23 +339,37 @@ impl<const D: usize> Grid<D> {
     /// following channels) in the cells `cells`: writes `out.len().min(channels)` values.
     #[inline(always)]
     pub fn interpolate<L: Lanes>(&self, l: L, cells: &[Cell<L>; D], out: &mut [L::F32s]) {
-        // Index of each lane's lower corner.
-        let mut base = cells[0].index * l.splat_i32(self.strides[0] as i32);
+        // Index of each lane's lower corner, in floating point (exact: tables stay below
+        // 2^24 nodes) to spare the integer multiplies SSE2 lacks.
+        let mut base = cells[0].index.to_f32() * self.strides[0] as f32;
         for k in 1..D {
-            base = base + cells[k].index * l.splat_i32(self.strides[k] as i32);
+            base = cells[k]
+                .index
+                .to_f32()
+                .mul_add(l.splat(self.strides[k] as f32), base);
         }
+        let base = base.to_i32();
+        let corners: [L::I32s; 16] =
+            core::array::from_fn(|c| base + l.splat_i32(self.corner_offsets[c % (1 << D)]));
+        // Coherent packets often fall in one cell: then every lane's corners are the same
+        // 2^D nodes, read once and splatted instead of gathered lane by lane.
+        let b0 = base.lane(0);
+        let same = base.eq(l.splat_i32(b0)).all().then_some(b0 as usize);
         let one = l.splat(1.0);
         let channels = out.len().min(self.channels);
         for (c, slot) in out.iter_mut().enumerate().take(channels) {
-            let base_c = base + l.splat_i32(c as i32);
+            let plane = &self.planes[c * self.nodes..(c + 1) * self.nodes];
             // Gather the 2^D corners, then lerp them down one axis at a time, last axis
             // first (corner bit 0 is the last axis).
             let mut v = [l.splat(0.0); 16];
-            for (corner, slot) in v.iter_mut().enumerate().take(1 << D) {
-                *slot = l.gather(
-                    &self.values,
-                    base_c + l.splat_i32(self.corner_offsets[corner]),
-                );
+            if let Some(b) = same {
+                for (corner, slot) in v.iter_mut().enumerate().take(1 << D) {
+                    *slot = l.splat(plane[b + self.corner_offsets[corner] as usize]);
+                }
+            } else {
+                for (corner, slot) in v.iter_mut().enumerate().take(1 << D) {
+                    *slot = l.gather(plane, corners[corner]);
+                }
             }
             let mut n = 1usize << D;
             for k in (0..D).rev() {
@@ -311,7 +377,8 @@ impl<const D: usize> Grid<D> {
                 let s = one - t;
                 n /= 2;
                 for j in 0..n {
-                    v[j] = v[2 * j] * s + v[2 * j + 1] * t;
+                    // Exact at t = 0 and t = 1, fused or not.
+                    v[j] = v[2 * j].mul_add(s, v[2 * j + 1] * t);
                 }
             }
             *slot = v[0];

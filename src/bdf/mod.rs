@@ -9,6 +9,7 @@ pub mod error;
 pub mod format;
 pub mod table;
 pub mod tabulate;
+pub mod workload;
 
 pub use analytic::{Analytic, Ggx, Ward};
 pub use angles::Frames;

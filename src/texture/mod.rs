@@ -9,6 +9,7 @@ pub mod load;
 pub mod lod;
 pub mod pyramid;
 pub mod sample;
+pub mod workload;
 
 pub use coords::TexCoords;
 pub use error::TextureError;
