@@ -32,7 +32,12 @@ pub fn exp<L: Lanes>(l: L, x: L::F32s) -> L::F32s {
         in_pade.select(pade(l, xn), table(l, xn))
     };
     let r = xn.lt(l.splat(TABLE_MIN)).select(l.splat(0.0), r);
-    let r = x.gt(l.splat(0.0)).select(l.splat(1.0) / r, r);
+    let positive = x.gt(l.splat(0.0));
+    let r = if positive.any() {
+        positive.select(l.splat(1.0) / r, r)
+    } else {
+        r
+    };
     x.is_nan().select(x, r)
 }
 
