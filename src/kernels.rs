@@ -102,7 +102,7 @@ fn map_packets<L: Lanes>(
     out: &mut [f32],
     f: impl Fn(L::F32s, L::F32s) -> L::F32s,
 ) {
-    assert!(a.len() % MAX_LANES == 0 && b.len() == a.len() && out.len() == a.len());
+    assert!(a.len().is_multiple_of(MAX_LANES) && b.len() == a.len() && out.len() == a.len());
     let mut i = 0;
     while i < a.len() {
         let x = l.load(black_box(&a[i..]));
