@@ -2,3 +2,5 @@
 //! Graphicon 2005.
 
 pub use coherent_simd as simd;
+
+pub mod machine;
