@@ -15,7 +15,9 @@
 //! - `to_i32` truncates toward zero; NaN and values outside the i32 range give `i32::MIN`
 //!   (x86's "integer indefinite").
 //! - `rsqrt` and `recip` are approximate where the hardware is: relative error at most
-//!   [`RSQRT_REL_ERROR`] / [`RECIP_REL_ERROR`] (the scalar backend is exact).
+//!   [`RSQRT_REL_ERROR`] / [`RECIP_REL_ERROR`] (the scalar backend is exact) for normal
+//!   inputs and results; the x86 estimates treat denormal inputs as zero (giving inf) and
+//!   flush denormal results to zero.
 //! - `mul_add(a, b, c)` is fused on backends with FMA and two roundings elsewhere: either
 //!   result is accepted (`tests/lanes.rs` checks it is one of the two).
 //! - Integer `+ - *` wrap; `>>` is arithmetic, [`SimdI32::shr_logical`] logical; shift counts
@@ -68,6 +70,7 @@ pub trait Lanes: Copy + Debug + Send + Sync + 'static {
 
     /// Lanes from a function of the lane index (packing, tests; not for hot loops).
     #[inline(always)]
+    #[allow(clippy::wrong_self_convention)] // a token method: the token proves the backend
     fn from_fn(self, mut f: impl FnMut(usize) -> f32) -> Self::F32s {
         let mut buf = [0.0f32; MAX_LANES];
         for (i, v) in buf.iter_mut().enumerate().take(Self::N) {
@@ -77,6 +80,7 @@ pub trait Lanes: Copy + Debug + Send + Sync + 'static {
     }
     /// Lanes from a function of the lane index (packing, tests; not for hot loops).
     #[inline(always)]
+    #[allow(clippy::wrong_self_convention)]
     fn from_fn_i32(self, mut f: impl FnMut(usize) -> i32) -> Self::I32s {
         let mut buf = [0i32; MAX_LANES];
         for (i, v) in buf.iter_mut().enumerate().take(Self::N) {
