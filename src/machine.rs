@@ -3,6 +3,7 @@
 //! beside every result as `machine.json` (DESIGN.md, results contract; paper section 7 names
 //! its machines the same way) and shown by `coherent info`.
 
+use crate::simd::Backend;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::process::Command;
@@ -103,6 +104,9 @@ pub struct Machine {
     /// Cargo profile of the build (`release` or `debug`).
     #[serde(default)]
     pub profile: String,
+    /// The lane backends compiled in and usable on this CPU (`Backend::available`).
+    #[serde(default)]
+    pub backends: Vec<String>,
 }
 
 impl Machine {
@@ -122,6 +126,10 @@ impl Machine {
             os: os_description(),
             target_features: compiled_features(),
             profile: env!("COHERENT_PROFILE").to_owned(),
+            backends: Backend::available()
+                .iter()
+                .map(|b| b.name().to_owned())
+                .collect(),
         }
     }
 
@@ -334,6 +342,7 @@ mod tests {
         assert!(machine.threads >= 1 && machine.cores >= 1);
         assert!(machine.rustc.starts_with("rustc "), "{}", machine.rustc);
         assert!(!machine.cpu.is_empty() && !machine.os.is_empty());
+        assert_eq!(machine.backends.first().map(String::as_str), Some("scalar"));
         // Every feature the build assumes must be present on the CPU running it.
         for feature in &machine.target_features {
             if cfg!(any(target_arch = "x86", target_arch = "x86_64")) {

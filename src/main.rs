@@ -3,6 +3,7 @@
 
 use clap::{Parser, Subcommand};
 use coherent::machine::Machine;
+use coherent::simd::Backend;
 use std::io::{self, Write};
 use std::process::ExitCode;
 
@@ -61,29 +62,45 @@ fn info(json: bool) -> anyhow::Result<()> {
             items.join(" ")
         }
     };
+    let rustflags = if machine.rustflags.is_empty() {
+        "(none)"
+    } else {
+        &machine.rustflags
+    };
     writeln!(out, "coherent {}", env!("CARGO_PKG_VERSION"))?;
-    writeln!(out, "cpu:              {}", machine.cpu)?;
+    writeln!(out, "cpu:               {}", machine.cpu)?;
     writeln!(
         out,
-        "cores / threads:  {} / {}",
+        "cores / threads:   {} / {}",
         machine.cores, machine.threads
     )?;
-    writeln!(out, "os:               {}", machine.os)?;
-    writeln!(out, "cpu features:     {}", list(&machine.cpu_features))?;
+    writeln!(out, "os:                {}", machine.os)?;
+    writeln!(out, "cpu features:      {}", list(&machine.cpu_features))?;
     writeln!(out, "build:")?;
-    writeln!(out, "  rustc:          {}", machine.rustc)?;
-    writeln!(out, "  profile:        {}", machine.profile)?;
+    writeln!(out, "  rustc:           {}", machine.rustc)?;
+    writeln!(out, "  profile:         {}", machine.profile)?;
+    writeln!(out, "  RUSTFLAGS:       {rustflags}")?;
+    writeln!(out, "  target features: {}", list(&machine.target_features))?;
+    writeln!(out, "  git:             {}", machine.git_rev)?;
+    writeln!(out, "backends:")?;
+    for backend in Backend::ALL {
+        let lanes = match backend.lanes() {
+            1 => "1 lane".to_owned(),
+            n => format!("{n} lanes"),
+        };
+        let state = match (backend.compiled(), backend.unavailable_reason()) {
+            (_, None) => "compiled in, usable here".to_owned(),
+            (true, Some(reason)) => format!("compiled in, not usable here: {reason}"),
+            (false, Some(reason)) => reason,
+        };
+        writeln!(out, "  {:<7} {lanes:<9} {state}", backend.name())?;
+    }
     writeln!(
         out,
-        "  RUSTFLAGS:      {}",
-        if machine.rustflags.is_empty() {
-            "(none)"
-        } else {
-            &machine.rustflags
-        }
+        "  wide4/8/16 use the build's target features (above): build with\n  \
+         RUSTFLAGS=\"-C target-cpu=native\" to let them use this CPU's AVX/AVX-512;\n  \
+         pulp8/16 choose AVX2/AVX-512 at run time."
     )?;
-    writeln!(out, "  target features: {}", list(&machine.target_features))?;
-    writeln!(out, "  git:            {}", machine.git_rev)?;
     out.flush()?;
     Ok(())
 }
