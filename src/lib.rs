@@ -4,3 +4,4 @@
 pub use coherent_simd as simd;
 
 pub mod kernels;
+pub mod machine;
