@@ -142,3 +142,11 @@ pub fn approx_inputs(f: Approx, n: usize) -> (Vec<f32>, Vec<f32>) {
     }
     (a, b)
 }
+
+/// The scalar backend's loops of the timed approximations, as standalone symbols so their
+/// assembly can be checked for packed instructions (`scripts/check-scalar-asm.sh`): the
+/// same generic code the experiment times, monomorphised for `Scalar`.
+#[inline(never)]
+pub fn scalar_baseline(f: Approx, a: &[f32], b: &[f32], out: &mut [f32]) {
+    ApproxKernel { f, a, b, out }.run(coherent_simd::scalar::Scalar);
+}
