@@ -5,6 +5,8 @@ pub use coherent_simd as simd;
 
 pub mod approx;
 pub mod bdf;
+pub mod kernels;
+pub mod machine;
 pub mod material;
 pub mod tabulated;
 pub mod texture;
