@@ -332,7 +332,16 @@ impl<const D: usize> Grid<D> {
     /// Each lane's cell on every axis.
     #[inline(always)]
     pub fn locate<L: Lanes>(&self, l: L, x: [L::F32s; D]) -> [Cell<L>; D] {
-        core::array::from_fn(|k| self.axes[k].locate(l, x[k]))
+        // Plain loops, not `array::from_fn`: everything here must inline into the
+        // backend's `#[target_feature]` entry point (a non-inlined helper loses AVX).
+        let mut cells = [Cell {
+            index: l.splat_i32(0),
+            t: l.splat(0.0),
+        }; D];
+        for k in 0..D {
+            cells[k] = self.axes[k].locate(l, x[k]);
+        }
+        cells
     }
 
     /// Multilinear interpolation of channel `c` (and, when `out` is longer, of the
@@ -349,26 +358,28 @@ impl<const D: usize> Grid<D> {
                 .mul_add(l.splat(self.strides[k] as f32), base);
         }
         let base = base.to_i32();
-        let corners: [L::I32s; 16] =
-            core::array::from_fn(|c| base + l.splat_i32(self.corner_offsets[c % (1 << D)]));
+        let mut corners = [base; 16];
+        for c in 0..1 << D {
+            corners[c] = base + l.splat_i32(self.corner_offsets[c]);
+        }
         // Coherent packets often fall in one cell: then every lane's corners are the same
         // 2^D nodes, read once and splatted instead of gathered lane by lane.
         let b0 = base.lane(0);
         let same = base.eq(l.splat_i32(b0)).all().then_some(b0 as usize);
         let one = l.splat(1.0);
         let channels = out.len().min(self.channels);
-        for (c, slot) in out.iter_mut().enumerate().take(channels) {
+        for c in 0..channels {
             let plane = &self.planes[c * self.nodes..(c + 1) * self.nodes];
             // Gather the 2^D corners, then lerp them down one axis at a time, last axis
             // first (corner bit 0 is the last axis).
             let mut v = [l.splat(0.0); 16];
             if let Some(b) = same {
-                for (corner, slot) in v.iter_mut().enumerate().take(1 << D) {
-                    *slot = l.splat(plane[b + self.corner_offsets[corner] as usize]);
+                for corner in 0..1 << D {
+                    v[corner] = l.splat(plane[b + self.corner_offsets[corner] as usize]);
                 }
             } else {
-                for (corner, slot) in v.iter_mut().enumerate().take(1 << D) {
-                    *slot = l.gather(plane, corners[corner]);
+                for corner in 0..1 << D {
+                    v[corner] = l.gather(plane, corners[corner]);
                 }
             }
             let mut n = 1usize << D;
@@ -381,7 +392,7 @@ impl<const D: usize> Grid<D> {
                     v[j] = v[2 * j].mul_add(s, v[2 * j + 1] * t);
                 }
             }
-            *slot = v[0];
+            out[c] = v[0];
         }
     }
 

@@ -1,5 +1,6 @@
 //! Experiment `kernels`: the approximations of sections 4.2, 5 and 6.1 (exp, log, pow, acos,
-//! atan2) timed on every lane backend usable here, and their measured error against `std`.
+//! atan2) and trilinear texture lookups (section 4.1) timed on every lane backend usable here,
+//! and the approximations' measured error against `std`.
 //!
 //! Protocol: each kernel maps a 16,384-value input (coherent, like neighbouring pixels:
 //! see `coherent::kernels::approx_inputs`) through the approximation; one *sample* is
@@ -12,6 +13,7 @@ use std::collections::BTreeMap;
 use coherent::kernels::{ApproxKernel, approx_inputs};
 use coherent::simd::approx::{Approx, Bound};
 use coherent::simd::{Backend, Kernel, Lanes};
+use coherent::texture::workload::{TextureInputs, TextureLookups, pattern_texture};
 
 use crate::ctx::Ctx;
 use crate::experiment::{Experiment, Status};
@@ -75,6 +77,31 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
             bar.inc(1);
         }
     }
+    // The texture kernel (section 4.1): trilinear lookups of a 1024 x 1024 mipmapped texture
+    // from a floor seen by a pinhole camera, the mip level by successive halving.
+    let texture = pattern_texture(1024);
+    let tex_inputs = TextureInputs::floor(ctx.pick(256, 512), 1024);
+    let mut tex_seconds: BTreeMap<Backend, Vec<f64>> = BTreeMap::new();
+    let tex_sample = |backend: Backend| -> anyhow::Result<f64> {
+        let start = std::time::Instant::now();
+        std::hint::black_box(backend.run(TextureLookups {
+            texture: &texture,
+            inputs: &tex_inputs,
+            lookups: passes * VALUES,
+        })?);
+        Ok(start.elapsed().as_secs_f64())
+    };
+    for &backend in &backends {
+        tex_sample(backend)?; // warm-up
+    }
+    for _ in 0..samples {
+        for &backend in &backends {
+            tex_seconds
+                .entry(backend)
+                .or_default()
+                .push(tex_sample(backend)?);
+        }
+    }
     bar.finish_and_clear();
 
     let scale = PER / (passes * VALUES) as f64;
@@ -91,6 +118,17 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
                 &format!("{:.3}", speedup(scalar, s)),
             ])?;
         }
+    }
+    let scalar = median(&tex_seconds[&Backend::Scalar]) * scale;
+    for &backend in &backends {
+        let s = median(&tex_seconds[&backend]) * scale;
+        csv.row(&[
+            &"texture_trilinear",
+            &backend.name(),
+            &backend.lanes(),
+            &format!("{s:.6e}"),
+            &format!("{:.3}", speedup(scalar, s)),
+        ])?;
     }
     csv.finish()?;
 
@@ -267,7 +305,9 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
          [-14, 0] (73% in the table part), log on (1e-6, 1] (17% in the table part), pow on \
          [0, 64] with y = 1/2.2 through the paper's range reduction, acos on [-1, 1], atan2 on \
          [-1, 1]^2. Issue 2's targets for exp/log/pow: sse >= 3.5x, 8 lanes >= 6x, 16 lanes >= \
-         10x.\n\n",
+         10x. `texture_trilinear` (section 4.1): trilinear lookups in a 1024 x 1024 mipmapped \
+         RGB texture at the texture coordinates of a floor seen by a pinhole camera (4 x 4 pixel \
+         tiles), the mip level chosen per lane by successive halving of the hit distance.\n\n",
     );
     // One row per kernel, one column per backend: "seconds (speedup x)".
     let backends = t.distinct("backend")?;

@@ -19,6 +19,7 @@ pub use experiment::{Experiment, Status};
 
 // The experiments, one module each.
 pub mod kernels;
+pub mod table1;
 
 /// Every experiment, in the order `reproduce` runs them and the README lists them. The
 /// names are the results contract (`--only` takes them).
@@ -31,13 +32,7 @@ pub const EXPERIMENTS: &[Experiment] = &[
         &["accel.csv"],
         Some(3),
     ),
-    Experiment::planned(
-        "table1",
-        "anisotropic tabulated BDF evaluations per backend",
-        "Table 1 (section 4.2)",
-        &["table1_bdf.csv"],
-        Some(5),
-    ),
+    table1::EXPERIMENT,
     Experiment::planned(
         "table2",
         "light source evaluation per light type and backend",

@@ -35,7 +35,9 @@ impl TexCoords {
         let b0 = l.splat(1.0) - b1 - b2;
         let mut s = zero;
         let mut t = zero;
-        for (k, w) in [b0, b1, b2].into_iter().enumerate() {
+        let weights = [b0, b1, b2];
+        for k in 0..3 {
+            let w = weights[k];
             let v = l.gather_u32(&self.indices, first + l.splat_i32(k as i32));
             s = w.mul_add(l.gather(&self.s, v), s);
             t = w.mul_add(l.gather(&self.t, v), t);

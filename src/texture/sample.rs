@@ -57,9 +57,10 @@ impl Texture {
         let one = l.splat(1.0);
         let mut index = [l.splat_i32(0); 8];
         let mut weight = [l.splat(0.0); 8];
-        for (k, (level, level_weight)) in
-            [(lower, one - frac), (upper, frac)].into_iter().enumerate()
-        {
+        // Plain loops: everything here must inline into the backend's entry point.
+        let levels = [(lower, one - frac), (upper, frac)];
+        for k in 0..2 {
+            let (level, level_weight) = levels[k];
             let level = level.to_i32();
             let w = l.gather(&self.level_width, level);
             let h = l.gather(&self.level_height, level);
@@ -97,15 +98,16 @@ impl Texture {
     #[inline(always)]
     pub fn sample<L: Lanes>(&self, l: L, s: L::F32s, t: L::F32s, lod: L::F32s) -> Rgbs<L> {
         let f = self.footprint(l, s, t, lod);
-        let [r, g, b] = core::array::from_fn(|c| {
+        let mut rgb = [l.splat(0.0); 3];
+        for c in 0..3 {
             let plane = &self.planes[c];
             let mut sum = f.weight[0] * l.gather(plane, f.index[0]);
             for k in 1..8 {
                 sum = f.weight[k].mul_add(l.gather(plane, f.index[k]), sum);
             }
-            sum
-        });
-        Rgbs::new(r, g, b)
+            rgb[c] = sum;
+        }
+        Rgbs::new(rgb[0], rgb[1], rgb[2])
     }
 
     /// The scalar reference of [`Texture::sample`], written directly with integer texel
