@@ -19,6 +19,10 @@
 //! `t = 1` (also when the backend fuses the multiply-add). Coordinates outside the axis clamp to its ends; NaN coordinates land on the
 //! first node (indices always stay inside the table, so inactive lanes need no care).
 
+// Index loops, not iterator adapters, in the per-packet code: it must inline into the
+// backends' `#[target_feature]` entry points (a non-inlined `array::from_fn` made pulp8 7x slower).
+#![allow(clippy::needless_range_loop)]
+
 use coherent_simd::{Lanes, SimdF32, SimdI32, SimdMask};
 use thiserror::Error;
 
@@ -93,7 +97,7 @@ impl Axis {
             if !value.is_finite() {
                 return Err(TableError::NonFiniteNode { axis, index, value });
             }
-            if index > 0 && !(value > nodes[index - 1]) {
+            if index > 0 && value <= nodes[index - 1] {
                 return Err(TableError::NonMonotonic {
                     axis,
                     index,
@@ -362,20 +366,39 @@ impl<const D: usize> Grid<D> {
         for c in 0..1 << D {
             corners[c] = base + l.splat_i32(self.corner_offsets[c]);
         }
-        // Coherent packets often fall in one cell: then every lane's corners are the same
-        // 2^D nodes, read once and splatted instead of gathered lane by lane.
-        let b0 = base.lane(0);
-        let same = base.eq(l.splat_i32(b0)).all().then_some(b0 as usize);
+        // Coherent packets fall in few cells (Table 1's packets of 16: one cell in half of
+        // them, at most three in 96%): then each cell's 2^D nodes are read once, splatted
+        // and selected into its lanes, instead of gathered lane by lane. More cells than
+        // `cap` and the packet gathers.
+        let cap = L::N / 4 + 1;
+        let mut bases = [0usize; 16];
+        let mut masks = [l.splat_mask(false); 16];
+        let mut cells_seen = 0;
+        let mut todo = l.splat_mask(true);
+        while todo.any() && cells_seen < cap.min(16) {
+            let b = base.lane(todo.bitmask().trailing_zeros() as usize);
+            let mine = base.eq(l.splat_i32(b));
+            bases[cells_seen] = b as usize;
+            masks[cells_seen] = mine;
+            todo = todo.and_not(mine);
+            cells_seen += 1;
+        }
+        let splat = todo.none();
         let one = l.splat(1.0);
         let channels = out.len().min(self.channels);
         for c in 0..channels {
             let plane = &self.planes[c * self.nodes..(c + 1) * self.nodes];
-            // Gather the 2^D corners, then lerp them down one axis at a time, last axis
-            // first (corner bit 0 is the last axis).
+            // The 2^D corners, lerped down one axis at a time, last axis first (corner bit
+            // 0 is the last axis).
             let mut v = [l.splat(0.0); 16];
-            if let Some(b) = same {
+            if splat {
                 for corner in 0..1 << D {
-                    v[corner] = l.splat(plane[b + self.corner_offsets[corner] as usize]);
+                    let off = self.corner_offsets[corner] as usize;
+                    let mut x = l.splat(plane[bases[0] + off]);
+                    for j in 1..cells_seen {
+                        x = masks[j].select(l.splat(plane[bases[j] + off]), x);
+                    }
+                    v[corner] = x;
                 }
             } else {
                 for corner in 0..1 << D {

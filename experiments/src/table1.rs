@@ -388,18 +388,18 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
         let mut rows = Vec::new();
         for &(lanes, target) in TARGETS {
             for b in &backends {
-                if let Some(r) = row_of(last, b)? {
-                    if t.f64(r, "lanes")? as usize == lanes {
-                        let s = t.f64(r, "speedup")?;
-                        let verdict = if s >= target { "met" } else { "not met" };
-                        rows.push(vec![
-                            b.clone(),
-                            lanes.to_string(),
-                            format!(">= {}x", fmt_num(target)),
-                            format!("{}x", fmt_num(s)),
-                            verdict.to_owned(),
-                        ]);
-                    }
+                if let Some(r) = row_of(last, b)?
+                    && t.f64(r, "lanes")? as usize == lanes
+                {
+                    let s = t.f64(r, "speedup")?;
+                    let verdict = if s >= target { "met" } else { "not met" };
+                    rows.push(vec![
+                        b.clone(),
+                        lanes.to_string(),
+                        format!(">= {}x", fmt_num(target)),
+                        format!("{}x", fmt_num(s)),
+                        verdict.to_owned(),
+                    ]);
                 }
             }
         }

@@ -98,7 +98,7 @@ impl Kernel for BdfCalls<'_> {
     fn run<L: Lanes>(self, l: L) -> f32 {
         let n = self.inputs.len();
         assert!(
-            n > 0 && n % 16 == 0,
+            n > 0 && n.is_multiple_of(16),
             "BDF inputs must be whole 16-call tiles"
         );
         let v = &self.inputs.v;

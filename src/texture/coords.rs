@@ -2,6 +2,10 @@
 //! fetched per lane (each lane may hit another triangle) and interpolated with the hit's
 //! barycentrics.
 
+// Index loops, not iterator adapters, in the per-packet code: it must inline into the
+// backends' `#[target_feature]` entry points (a non-inlined `array::from_fn` made pulp8 7x slower).
+#![allow(clippy::needless_range_loop)]
+
 use coherent_simd::{Lanes, SimdF32, SimdMask};
 
 /// Per-vertex texture coordinates of a mesh and its triangles.

@@ -106,7 +106,7 @@ impl Kernel for TextureLookups<'_> {
     fn run<L: Lanes>(self, l: L) -> f32 {
         let n = self.inputs.len();
         assert!(
-            n > 0 && n % 16 == 0,
+            n > 0 && n.is_multiple_of(16),
             "texture inputs must be whole 16-lookup tiles"
         );
         let top = self.texture.levels().len() - 1;
