@@ -6,7 +6,7 @@
 
 use coherent_simd::{Kernel, Lanes, Rgbs, SimdF32};
 
-use super::lod::lod_by_halving;
+use super::lod::{lod_by_halving, lod_from_differentials};
 use super::pyramid::Texture;
 use super::sample::Wrap;
 
@@ -16,6 +16,11 @@ pub struct TextureInputs {
     pub s: Vec<f32>,
     pub t: Vec<f32>,
     pub dist: Vec<f32>,
+    /// Ray differentials: the change of `s` and `t` to the next pixel right and down.
+    pub ds_dx: Vec<f32>,
+    pub dt_dx: Vec<f32>,
+    pub ds_dy: Vec<f32>,
+    pub dt_dy: Vec<f32>,
     /// Pixel footprint at unit distance, in finest-level texels (see [`lod_by_halving`]).
     pub spread: f32,
 }
@@ -33,15 +38,16 @@ impl TextureInputs {
 
     /// A `size` x `size` image of the floor `y = 0` seen from height 1.5 looking slightly
     /// down, the texture repeating every 2 world units and `texels` texels wide; only
-    /// tiles that all hit the floor within 200 units are kept.
+    /// tiles that all hit the floor within 200 units (and whose pixels' right and lower
+    /// neighbours do, for the differentials) are kept.
     pub fn floor(size: usize, texels: usize) -> Self {
         let size = size.div_ceil(4) * 4;
         let (eye_y, pitch, half_fov) = (1.5f32, -0.35f32, 0.5f32);
         let (sp, cp) = pitch.sin_cos();
         let period = 2.0f32;
-        let hit = |px: usize, py: usize| -> Option<(f32, f32, f32)> {
-            let x = ((px as f32 + 0.5) / size as f32 * 2.0 - 1.0) * half_fov;
-            let y = (1.0 - (py as f32 + 0.5) / size as f32 * 2.0) * half_fov;
+        let hit = |px: f32, py: f32| -> Option<(f32, f32, f32)> {
+            let x = ((px + 0.5) / size as f32 * 2.0 - 1.0) * half_fov;
+            let y = (1.0 - (py + 0.5) / size as f32 * 2.0) * half_fov;
             // Camera looking along -z, pitched down.
             let d = glam::Vec3::new(x, y * cp + sp, -cp + y * sp).normalize();
             if d.y >= -1e-3 {
@@ -57,11 +63,19 @@ impl TextureInputs {
         };
         for ty in (0..size).step_by(4) {
             for tx in (0..size).step_by(4) {
-                let tile: Option<Vec<_>> = (0..16).map(|i| hit(tx + i % 4, ty + i / 4)).collect();
-                for (s, t, d) in tile.into_iter().flatten() {
+                let pixel = |i: usize| {
+                    let (px, py) = ((tx + i % 4) as f32, (ty + i / 4) as f32);
+                    Some((hit(px, py)?, hit(px + 1.0, py)?, hit(px, py + 1.0)?))
+                };
+                let tile: Option<Vec<_>> = (0..16).map(pixel).collect();
+                for ((s, t, d), (sx, tx_, _), (sy, ty_, _)) in tile.into_iter().flatten() {
                     out.s.push(s);
                     out.t.push(t);
                     out.dist.push(d);
+                    out.ds_dx.push(sx - s);
+                    out.dt_dx.push(tx_ - t);
+                    out.ds_dy.push(sy - s);
+                    out.dt_dy.push(ty_ - t);
                 }
             }
         }
@@ -89,14 +103,52 @@ pub fn pattern_texture(size: usize) -> Texture {
     Texture::from_linear("pattern", size, size, &texels, Wrap::Repeat).expect("valid pattern")
 }
 
+/// How a lookup's mip level is chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum LodMethod {
+    /// The paper's: successive halving of the hit distance ([`lod_by_halving`]).
+    Halving,
+    /// From the ray differentials ([`lod_from_differentials`]).
+    Differentials,
+}
+
+/// The mip level of the packet of lookups starting at `i`.
+#[inline(always)]
+pub fn lod_at<L: Lanes>(
+    l: L,
+    texture: &Texture,
+    inputs: &TextureInputs,
+    method: LodMethod,
+    i: usize,
+) -> L::F32s {
+    let top = texture.levels().len() - 1;
+    match method {
+        LodMethod::Halving => lod_by_halving(l, l.load(&inputs.dist[i..]), inputs.spread, top),
+        LodMethod::Differentials => {
+            let finest = texture.levels()[0];
+            lod_from_differentials(
+                l,
+                l.load(&inputs.ds_dx[i..]),
+                l.load(&inputs.dt_dx[i..]),
+                l.load(&inputs.ds_dy[i..]),
+                l.load(&inputs.dt_dy[i..]),
+                finest.width,
+                finest.height,
+                top,
+            )
+        }
+    }
+}
+
 /// `lookups` trilinear lookups in `texture` over `inputs` (cycled), a packet at a time,
-/// each with its mip level by successive halving; returns the sum (so nothing is
-/// optimised away).
+/// each with its mip level chosen by `lod`; returns the sum (so nothing is optimised
+/// away).
 #[derive(Debug, Clone, Copy)]
 pub struct TextureLookups<'a> {
     pub texture: &'a Texture,
     pub inputs: &'a TextureInputs,
     pub lookups: usize,
+    pub lod: LodMethod,
 }
 
 impl Kernel for TextureLookups<'_> {
@@ -109,13 +161,12 @@ impl Kernel for TextureLookups<'_> {
             n > 0 && n.is_multiple_of(16),
             "texture inputs must be whole 16-lookup tiles"
         );
-        let top = self.texture.levels().len() - 1;
         let mut sum = Rgbs::zero(l);
         let (mut done, mut i) = (0, 0);
         while done < self.lookups {
             let s = l.load(&self.inputs.s[i..]);
             let t = l.load(&self.inputs.t[i..]);
-            let lod = lod_by_halving(l, l.load(&self.inputs.dist[i..]), self.inputs.spread, top);
+            let lod = lod_at(l, self.texture, self.inputs, self.lod, i);
             sum += self.texture.sample(l, s, t, lod);
             done += L::N;
             i += L::N;
