@@ -3,4 +3,5 @@
 
 pub use coherent_simd as simd;
 
+pub mod kernels;
 pub mod machine;

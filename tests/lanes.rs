@@ -122,6 +122,10 @@ impl Kernel for Ops<'_> {
             let idx = (idx & l.splat_i32(63)).min(l.splat_i32(36));
             push("gather", fb(l.gather(&table, idx)));
             push("gather_u32", ib_(l.gather_u32(&table_u, idx)));
+            let idx2 = idx.min(l.splat_i32(35));
+            let (lo, hi) = l.gather2(&table, idx2);
+            push("gather2_lo", fb(lo));
+            push("gather2_hi", fb(hi));
 
             // Stores, masked stores and round trips through slices.
             let mut buf = inp.c;

@@ -21,17 +21,12 @@ pub use table::{PaperTable, Table};
 pub use timing::{Timing, speedup};
 
 // The experiments, one module each.
+pub mod kernels;
 
 /// Every experiment, in the order `reproduce` runs them and the README lists them. The
 /// names are the results contract (`--only` takes them).
 pub const EXPERIMENTS: &[Experiment] = &[
-    Experiment::planned(
-        "kernels",
-        "the approximations (exp, log, pow, acos, atan2) per lane backend",
-        "section 4-5 (SSE approximations)",
-        &["kernels.csv"],
-        Some(2),
-    ),
+    kernels::EXPERIMENT,
     Experiment::planned(
         "accel",
         "traversal speed, build time and memory per accel, ray kind and packet width",

@@ -67,6 +67,14 @@ pub trait Lanes: Copy + Debug + Send + Sync + 'static {
     fn gather(self, table: &[f32], idx: Self::I32s) -> Self::F32s;
     /// `table[idx[i]]` per lane, as bits. Panics if any lane's index is outside `table`.
     fn gather_u32(self, table: &[u32], idx: Self::I32s) -> Self::I32s;
+    /// `(table[idx[i]], table[idx[i] + 1])` per lane: the two ends of an interpolation
+    /// interval. Backends with 64-bit gathers load each pair at once (half the gathered
+    /// elements). Panics unless every `idx[i] + 1` lies inside `table`.
+    #[inline(always)]
+    fn gather2(self, table: &[f32], idx: Self::I32s) -> (Self::F32s, Self::F32s) {
+        let lo = self.gather(&table[..table.len().saturating_sub(1)], idx);
+        (lo, self.gather(&table[1..], idx))
+    }
 
     /// Lanes from a function of the lane index (packing, tests; not for hot loops).
     #[inline(always)]
