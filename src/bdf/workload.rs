@@ -124,3 +124,11 @@ impl Kernel for BdfCalls<'_> {
         (0..L::N).map(|k| total.lane(k)).sum()
     }
 }
+
+/// The scalar backend's loop of [`BdfCalls`], as a standalone symbol so that its assembly
+/// can be inspected (as `scripts/check-scalar-asm.sh` does for the approximation kernels):
+/// the same generic code `table1` times, monomorphised for `Scalar`.
+#[inline(never)]
+pub fn scalar_baseline_bdf(bdf: &AnisotropicBdf, inputs: &BdfInputs, calls: usize) -> f32 {
+    BdfCalls { bdf, inputs, calls }.run(coherent_simd::scalar::Scalar)
+}
