@@ -185,10 +185,13 @@ impl Axis {
     /// N-wide binary search.
     #[inline(always)]
     pub fn locate<L: Lanes>(&self, l: L, x: L::F32s) -> Cell<L> {
-        if L::N == 1 {
+        // One lane, and the 4-lane packets of SSE2-level backends (a select is three
+        // instructions there and packets of 4 mostly share each axis's cell): read the
+        // lower node back once after the search. Wider packets carry it (see below).
+        if L::N <= 4 {
             return self.locate_coherent(l, x);
         }
-        // Packets: the search carries each lane's lower node and reciprocal width along
+        // Wider packets: the search carries each lane's lower node and reciprocal width along
         // with its index (a select each per step), so that no lane needs reading back
         // and no data-dependent branch is taken after the search.
         let h = &self.halves;
@@ -240,9 +243,9 @@ impl Axis {
         Cell { index: base, t }
     }
 
-    /// [`Axis::locate`] for one lane (and the form it had for packets before they carried
-    /// the lower node through the search): find the index, then read its node once when
-    /// every lane shares it. Gives the same cells and weights.
+    /// [`Axis::locate`] as used for one lane and packets of 4: find the index, then read
+    /// its node once when every lane shares it (gather it otherwise). Gives the same cells
+    /// and weights.
     #[inline(always)]
     pub fn locate_coherent<L: Lanes>(&self, l: L, x: L::F32s) -> Cell<L> {
         let h = &self.halves;
