@@ -18,6 +18,7 @@ pub mod mesh;
 pub mod packet;
 pub mod ray;
 pub mod scene;
+pub mod shapes;
 pub mod triangle;
 
 pub use aabb::Aabb;
