@@ -337,7 +337,7 @@ mod tests {
 
     #[test]
     fn event_keys_sort_by_position_then_kind() {
-        let mut v = vec![
+        let mut v = [
             key(1.0, START, 3),
             key(-2.0, END, 1),
             key(1.0, END, 2),

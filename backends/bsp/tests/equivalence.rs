@@ -7,7 +7,7 @@ mod common;
 use coherent_accel::shapes::{Rng, icosphere, soup};
 use coherent_accel::{Accel, Mesh, Ray1, Rays, Scene};
 use coherent_bsp::{Bsp, BspParams, SahParams};
-use coherent_simd::{Lanes, SimdMask as _};
+use coherent_simd::Lanes;
 use common::*;
 use glam::Vec3;
 use proptest::prelude::*;

@@ -46,7 +46,7 @@ pub fn random_scene(seed: u64, tris: usize, meshes: usize, instances: usize) -> 
     }
     for _ in 0..instances {
         let mesh = rng.next_u64() as usize % scene.meshes.len();
-        let m = if rng.next_u64() % 3 == 0 {
+        let m = if rng.next_u64().is_multiple_of(3) {
             Affine3A::IDENTITY
         } else {
             let q = Quat::from_axis_angle(rng.unit_vector(), rng.range(0.0, 6.3));
@@ -104,15 +104,15 @@ pub fn random_rays(seed: u64, scene: &Scene, n: usize) -> Vec<Ray1> {
                 }
                 _ => rng.unit_vector(),
             };
-            if rng.next_u64() % 4 == 0 {
+            if rng.next_u64().is_multiple_of(4) {
                 d *= rng.range(0.01, 10.0);
             }
-            let tmin = if rng.next_u64() % 5 == 0 {
+            let tmin = if rng.next_u64().is_multiple_of(5) {
                 rng.range(0.0, 2.0)
             } else {
                 0.0
             };
-            let tmax = if rng.next_u64() % 4 == 0 {
+            let tmax = if rng.next_u64().is_multiple_of(4) {
                 rng.range(tmin, 30.0)
             } else {
                 f32::INFINITY
@@ -198,7 +198,7 @@ pub fn check_all_queries<L: Lanes>(
     let mut rng = Rng::new(mask_seed);
     for chunk in rays.chunks(L::N) {
         let p = Rays::from_fn(l, |i| chunk[i % chunk.len()]);
-        let bits = if rng.next_u64() % 2 == 0 {
+        let bits = if rng.next_u64().is_multiple_of(2) {
             u32::MAX
         } else {
             rng.next_u64() as u32
