@@ -18,6 +18,7 @@ use coherent_simd::{Lanes, SimdF32, SimdMask};
 use glam::{DVec3, Vec3};
 
 use crate::Vec3s;
+use crate::packet::axis;
 
 /// Edge tolerance of the barycentric test, in barycentric units (a fraction of the triangle's
 /// size). Chosen by the watertightness measurement: see the module documentation.
@@ -133,10 +134,10 @@ impl TriAccel {
     ) -> (L::Mask, L::F32s, L::F32s, L::F32s) {
         let k = self.k as usize;
         let (ku, kv) = uv_axes(self.k);
-        let wk = o.axis(k) - l.splat(self.a_k);
-        let wu = o.axis(ku) - l.splat(self.a_u);
-        let wv = o.axis(kv) - l.splat(self.a_v);
-        let (dk, du, dv) = (d.axis(k), d.axis(ku), d.axis(kv));
+        let wk = axis(o, k) - l.splat(self.a_k);
+        let wu = axis(o, ku) - l.splat(self.a_u);
+        let wv = axis(o, kv) - l.splat(self.a_v);
+        let (dk, du, dv) = (axis(d, k), axis(d, ku), axis(d, kv));
         let n_u = l.splat(self.n_u);
         let n_v = l.splat(self.n_v);
         let denom = dk + n_u * du + n_v * dv;

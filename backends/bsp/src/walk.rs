@@ -4,6 +4,7 @@
 //! have finished; a node is skipped when every active lane's hit is nearer than it. When a
 //! subtree's active lanes fall to a threshold, its lanes continue ray by ray.
 
+use coherent_accel::packet::axis;
 use coherent_accel::{Aabb, Rays, Vec3s};
 use coherent_simd::{Lanes, SimdF32, SimdI32, SimdMask};
 
@@ -54,8 +55,8 @@ pub(crate) fn clip_box<L: Lanes>(
 ) -> (L::F32s, L::F32s) {
     let (ninf, inf) = (l.splat(f32::NEG_INFINITY), l.splat(f32::INFINITY));
     for k in 0..3 {
-        let a = (l.splat(b.min[k]) - o.axis(k)) * inv.axis(k);
-        let c = (l.splat(b.max[k]) - o.axis(k)) * inv.axis(k);
+        let a = (l.splat(b.min[k]) - axis(o, k)) * axis(inv, k);
+        let c = (l.splat(b.max[k]) - axis(o, k)) * axis(inv, k);
         // NaN: a ray in a face plane with a zero direction component; the slab does not
         // limit it.
         let nan = a.is_nan() | c.is_nan();
@@ -142,7 +143,7 @@ pub(crate) fn walk<L: Lanes, S, C: Counters>(
                 }
                 c.inner();
                 let k = n.axis();
-                let ts = (l.splat(n.split()) - r.o.axis(k)) * r.inv.axis(k);
+                let ts = (l.splat(n.split()) - axis(r.o, k)) * axis(r.inv, k);
                 let neg = (r.signs >> k & 1) as usize;
                 let near = n.left() + neg;
                 let far = n.left() + 1 - neg;
