@@ -2,3 +2,6 @@
 //! Graphicon 2005.
 
 pub use coherent_simd as simd;
+
+pub mod kernels;
+pub mod machine;
