@@ -53,7 +53,9 @@ fn main() {
     let (w, h) = args
         .get(3)
         .and_then(|s| s.split_once('x'))
-        .map_or((1024, 768), |(a, b)| (a.parse().unwrap(), b.parse().unwrap()));
+        .map_or((1024, 768), |(a, b)| {
+            (a.parse().unwrap(), b.parse().unwrap())
+        });
     let params = params(args.get(4).map(|s| s.parse().unwrap()));
     match name {
         "build" => build(&params),
@@ -177,7 +179,14 @@ fn trace(s: &BuiltinScene, params: &BspParams, w: u32, h: u32) {
                 }
                 (c, 1.0)
             }
-            Some(b) => (b.run(Counted { bsp: &bsp, rays: &rays }).unwrap(), b.lanes() as f64),
+            Some(b) => (
+                b.run(Counted {
+                    bsp: &bsp,
+                    rays: &rays,
+                })
+                .unwrap(),
+                b.lanes() as f64,
+            ),
         };
         let p = rays.len() as f64 / per;
         println!(
@@ -204,7 +213,10 @@ fn trace(s: &BuiltinScene, params: &BspParams, w: u32, h: u32) {
             rays.len(),
             rays.len() as f64 / one.seconds / 1e6
         );
-        for b in Backend::available().into_iter().filter(|b| *b != Backend::Scalar) {
+        for b in Backend::available()
+            .into_iter()
+            .filter(|b| *b != Backend::Scalar)
+        {
             let rays = rays_for(s, &bsp, kind, w, h, b.lanes());
             let r = b
                 .run(TimePackets {

@@ -160,13 +160,15 @@ impl BspParams {
 }
 
 /// The measured best active-lane count at or below which a packet's subtree is traversed ray
-/// by ray, per packet width. Filled in from the `accel` experiment's threshold sweep (see
-/// the crate README / results).
-pub fn default_single_ray_threshold(lanes: usize) -> u32 {
-    match lanes {
-        0..=1 => 0,
-        2..=4 => 1,
-        5..=8 => 1,
-        _ => 2,
-    }
+/// by ray, per packet width: 0 (never) at every width.
+///
+/// Measured by the `accel` experiment's sweep (`accel_threshold.csv`, thresholds 0 to
+/// width / 2, primary and diffuse rays, `room` and `blob`): 0 was best or within noise of the
+/// best everywhere, e.g. room primary at 256x192 (quick): width 4 (sse) 15.5 / 14.6 / 13.0
+/// Mrays/s for thresholds 0 / 1 / 2, width 16 (pulp16) 34.4 / 33.1 / 30.4 / 28.0 / 25.8 for
+/// 0 to 4. A kd-tree packet step with one active lane costs about what a single-ray step
+/// costs (a split test and a branch), while each switch pays for unpacking the lane, three
+/// divisions and a fresh mailbox, and switched subtrees are mostly small.
+pub fn default_single_ray_threshold(_lanes: usize) -> u32 {
+    0
 }

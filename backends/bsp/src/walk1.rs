@@ -242,7 +242,11 @@ fn enter1<Q: Query1, C: Counters>(
         mesh1(mesh, r, i, None, bsp.params.mailbox, q, c)
     } else {
         let m = &inst.object_from_world;
-        let ro = Ray1x::new(transform_point1(m, od.0), transform_vector1(m, od.1), r.tmin);
+        let ro = Ray1x::new(
+            transform_point1(m, od.0),
+            transform_vector1(m, od.1),
+            r.tmin,
+        );
         mesh1(mesh, &ro, i, None, bsp.params.mailbox, q, c)
     }
 }
