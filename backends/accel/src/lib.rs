@@ -20,6 +20,7 @@ pub mod ray;
 pub mod scene;
 pub mod scenes;
 pub mod shapes;
+pub mod testing;
 pub mod triangle;
 pub mod workload;
 

@@ -1,13 +1,14 @@
-//! Shared helpers of the BSP tests: random scenes and rays, and the comparison of every
-//! query (single-ray and packet) against `BruteForce` (paper section 3's queries).
+//! Helpers for testing an accelerator against [`BruteForce`] (paper section 3's three
+//! queries): random scenes (soups with planar, shared-edge and degenerate triangles, random
+//! instance transforms), random rays (axis-parallel, aimed at vertices and edges, finite
+//! bounds), and checks of every query, single-ray and packet, with the tie rule of the
+//! [`Accel`] contract. Used by the BSP's tests; any other accelerator can use them too.
 
-#![allow(dead_code)]
-
-use coherent_accel::shapes::{Rng, soup};
-use coherent_accel::{Accel, BruteForce, Hit1, Instance, Mesh, Ray1, Rays, Scene};
-use coherent_bsp::{Bsp, BspParams};
 use coherent_simd::{Lanes, SimdMask};
 use glam::{Affine3A, Quat, Vec3};
+
+use crate::shapes::{Rng, soup};
+use crate::{Accel, BruteForce, Hit1, Instance, Ray1, Rays, Scene};
 
 /// A random scene: `meshes` soups of about `tris` triangles in total (with some planar,
 /// axis-aligned and degenerate triangles), placed by `instances` instances (identity or
@@ -177,22 +178,22 @@ pub fn check_all(bf: &BruteForce, ray: &Ray1, got: Vec<Hit1>) -> Result<(), Stri
     }
 }
 
-/// Every query of `bsp`, single-ray and in packets of `L`, against brute force over `rays`.
+/// Every query of `accel`, single-ray and in packets of `L`, against brute force over `rays`.
 /// Packets use the active lanes of `mask_seed`'s pattern (inactive lanes must stay misses).
-pub fn check_all_queries<L: Lanes>(
+pub fn check_all_queries<L: Lanes, A: Accel>(
     l: L,
     bf: &BruteForce,
-    bsp: &Bsp,
+    accel: &A,
     rays: &[Ray1],
     mask_seed: u64,
 ) -> Result<(), String> {
     for r in rays {
-        check_first(bf, r, bsp.intersect1(r))?;
-        if bf.occluded1(r) != bsp.occluded1(r) {
+        check_first(bf, r, accel.intersect1(r))?;
+        if bf.occluded1(r) != accel.occluded1(r) {
             return Err(format!("{r:?}: occluded1 want {}", bf.occluded1(r)));
         }
         let mut all = vec![];
-        bsp.intersect_all1(r, &mut |h| all.push(h));
+        accel.intersect_all1(r, &mut |h| all.push(h));
         check_all(bf, r, all)?;
     }
     let mut rng = Rng::new(mask_seed);
@@ -204,10 +205,10 @@ pub fn check_all_queries<L: Lanes>(
             rng.next_u64() as u32
         };
         let active = l.mask_from_fn(|i| i < chunk.len() && bits >> i & 1 == 1);
-        let hits = bsp.intersect(l, &p, active);
-        let occ = bsp.occluded(l, &p, active);
+        let hits = accel.intersect(l, &p, active);
+        let occ = accel.occluded(l, &p, active);
         let mut all = vec![vec![]; L::N];
-        bsp.intersect_all(l, &p, active, &mut |i, h| all[i].push(h));
+        accel.intersect_all(l, &p, active, &mut |i, h| all[i].push(h));
         for (i, hits_i) in all.into_iter().enumerate() {
             let r = p.lane(i);
             if active.lane(i) {
@@ -227,15 +228,10 @@ pub fn check_all_queries<L: Lanes>(
     Ok(())
 }
 
-/// Builds both accelerators.
-pub fn build_both(scene: &Scene, params: &BspParams) -> (BruteForce, Bsp) {
+/// Builds brute force and `A` with `params` (panics on bad scenes: test helper).
+pub fn build_both<A: Accel>(scene: &Scene, params: &A::Params) -> (BruteForce, A) {
     (
         BruteForce::build(scene, &()).unwrap(),
-        Bsp::build(scene, params).unwrap(),
+        A::build(scene, params).unwrap(),
     )
-}
-
-/// A single mesh scene.
-pub fn one(mesh: Mesh) -> Scene {
-    Scene::single(mesh)
 }
