@@ -17,7 +17,10 @@ use crate::{AccelError, Hit1, Hits, Instance, Ray1, Rays, Scene};
 /// - hits name the triangle by its index in its mesh's `indices` and the instance by its
 ///   index in the scene's `instances`;
 /// - when two triangles are hit at the same `t` (a shared edge, coplanar overlap), which one
-///   is reported is unspecified.
+///   is reported is unspecified;
+/// - a hit whose barycentrics lie outside `[0, 1]` (in the tolerance band the projection test
+///   accepts beyond a triangle's edges, [`crate::EDGE_EPS`], for watertightness) may be
+///   missed: accelerators reference a triangle in the cells its exact shape reaches.
 ///
 /// The packet forms have default implementations that loop over the active lanes and call
 /// the single-ray forms; accelerators with real packet traversal override them.

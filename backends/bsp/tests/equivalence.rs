@@ -251,6 +251,14 @@ impl Kernel for RandomScene {
     }
 }
 
+/// Random scenes per backend: 24, or `PROPTEST_CASES` when set (for longer hunts).
+fn cases() -> u32 {
+    std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(24)
+}
+
 /// Runs `k` on backend `b`, or says why it is skipped (`None`).
 fn on<K: Kernel>(b: Backend, k: K) -> Option<K::Output> {
     match b.unavailable_reason() {
@@ -285,7 +293,7 @@ macro_rules! bsp_tests {
             }
 
             proptest! {
-                #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+                #![proptest_config(ProptestConfig { cases: cases(), ..ProptestConfig::default() })]
 
                 #[test]
                 fn random_scenes_match_brute_force(
