@@ -33,4 +33,4 @@ pub use mesh::Mesh;
 pub use packet::{Hits, Rays, Vec3s};
 pub use ray::{Hit1, Ray1, transform_point1, transform_vector1};
 pub use scene::Scene;
-pub use triangle::{EDGE_EPS, TriAccel};
+pub use triangle::{EDGE_EPS, MIN_THINNESS, TriAccel};
