@@ -20,7 +20,13 @@ use glam::{DVec3, Vec3};
 use crate::Vec3s;
 
 /// Edge tolerance of the barycentric test, in barycentric units (a fraction of the triangle's
-/// size). Chosen by the watertightness measurement: see the module documentation.
+/// size): points with `u, v, 1 - u - v >= -EDGE_EPS` are hits.
+///
+/// Measured with `backends/bsp/tests/watertight.rs` (`million_rays`: 7 closed meshes, 10^6
+/// rays each from inside, aimed exactly at shared vertices and edge points): with 0, 557,830
+/// of 7 * 10^6 rays leaked (7.5% on the icosphere: each triangle's own rounding puts an
+/// edge point outside it about half the time); with 2^-13, 1 ray leaked (a grazing ray in
+/// the torus), on the scalar, sse and pulp16 backends alike.
 pub const EDGE_EPS: f32 = 1.0 / 8192.0;
 
 /// Triangles whose height is below this fraction of their longest edge count as degenerate

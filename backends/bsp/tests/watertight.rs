@@ -9,6 +9,14 @@
 //! `ci_no_leaks` runs a modest number of rays on every backend; `million_rays` (ignored, run
 //! with `cargo test --release -p coherent-bsp --test watertight -- --ignored --nocapture`)
 //! counts leaks over 10^6 rays per configuration and prints them.
+//!
+//! Last measured: 1 leak in 7 * 10^6 rays per backend (scalar, sse, pulp16; the same ray, a
+//! grazing one in the torus), single-ray and packet alike, with `EDGE_EPS = 2^-13`; without
+//! the tolerance 557,830. The BSP adds no leaks of its own: brute force leaks on exactly the
+//! same rays. The remaining leaks come from the projection test itself: for a ray meeting a
+//! triangle's plane at a grazing angle, the rounding of the hit distance moves the projected
+//! point by more than the tolerance. A watertight test (shared edge functions, Woop et al.
+//! 2013) would remove them at about twice the arithmetic per test; the paper's test is kept.
 
 use coherent_accel::shapes::{Rng, cuboid, icosphere, torus, uv_sphere};
 use coherent_accel::{Accel, Instance, Mesh, Ray1, Rays, Scene};
