@@ -128,10 +128,12 @@ pub fn same_t(a: f32, b: f32) -> bool {
     (a - b).abs() <= 1e-5 * a.abs().max(b.abs()).max(1.0)
 }
 
-/// Whether a hit lies on its triangle proper, not only in the edge tolerance band
-/// ([`crate::EDGE_EPS`]) that accelerators may miss (see [`Accel`]).
+/// Whether a hit lies at least [`crate::EDGE_EPS`] inside all edges of its triangle: hits
+/// nearer an edge than that (inside or out) may be missed by an accelerator (see [`Accel`]:
+/// rounding decides on which side of the edge they truly are).
 pub fn in_core(h: &Hit1) -> bool {
-    h.u >= 0.0 && h.v >= 0.0 && h.u + h.v <= 1.0
+    let e = crate::EDGE_EPS;
+    h.u >= e && h.v >= e && h.u + h.v <= 1.0 - e
 }
 
 fn all_hits(bf: &BruteForce, ray: &Ray1) -> Vec<Hit1> {

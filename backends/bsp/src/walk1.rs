@@ -55,10 +55,11 @@ impl Ray1x {
     }
 }
 
-/// Relative slack added to ray segments where a split cuts them: `ts` and the hit `t` are
-/// rounded differently, and a ray through a voxel corner must not skip the voxel it touches
-/// (a hit exactly at a vertex lying in two split planes was missed without it).
-pub(crate) const SLACK: f32 = 1.0 / (1 << 20) as f32;
+/// Relative slack added to ray segments where a split or a box cuts them (2^-16): `ts` and
+/// the hit `t` are rounded differently, and a ray through a voxel corner must not skip the
+/// voxel it touches. Without it the equivalence tests found hits exactly at a vertex lying in
+/// two split planes missed; 2^-20 still missed one behind a scaling instance transform.
+pub(crate) const SLACK: f32 = 1.0 / (1 << 16) as f32;
 
 /// `x` moved down by [`SLACK`] relative.
 #[inline(always)]

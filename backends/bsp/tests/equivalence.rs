@@ -155,6 +155,25 @@ pub fn edge_cases<L: Lanes>(l: L) {
     check(&scene, &rays);
 }
 
+/// Random scenes that once failed (seed, triangles, meshes, instances): a vertex on the mesh
+/// box's corner, a needle triangle, a vertex in two split planes behind a scaling transform.
+const REGRESSIONS: [(u64, usize, usize, usize); 3] = [
+    (11532196785894520903, 4, 2, 1),
+    (5172459823018468742, 54, 2, 5),
+    (667622533911027691, 273, 3, 1),
+];
+
+pub fn regressions<L: Lanes>(l: L) {
+    for (seed, tris, meshes, instances) in REGRESSIONS {
+        let scene = random_scene(seed, tris, meshes, instances);
+        let rays = random_rays(seed, &scene, 96);
+        for p in param_sets(L::N) {
+            let (bf, bsp) = build_both::<Bsp>(&scene, &p);
+            check_all_queries(l, &bf, &bsp, &rays, seed).unwrap();
+        }
+    }
+}
+
 /// 10^5 triangles: built once, 64 rays against brute force per backend.
 pub fn large_scene<L: Lanes>(l: L) {
     static LARGE: OnceLock<(BruteForce, Bsp, Vec<Ray1>)> = OnceLock::new();
@@ -208,6 +227,15 @@ impl Kernel for EdgeCases {
     #[inline(always)]
     fn run<L: Lanes>(self, l: L) {
         edge_cases(l)
+    }
+}
+
+struct Regressions;
+impl Kernel for Regressions {
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) {
+        regressions(l)
     }
 }
 
@@ -285,6 +313,11 @@ macro_rules! bsp_tests {
             #[test]
             fn large_scene() {
                 on(B, LargeScene);
+            }
+
+            #[test]
+            fn regressions() {
+                on(B, Regressions);
             }
 
             #[test]
