@@ -21,6 +21,7 @@ pub use table::{PaperTable, Table};
 pub use timing::{Timing, speedup};
 
 // The experiments, one module each.
+pub mod accel;
 pub mod kernels;
 pub mod table1;
 
@@ -28,13 +29,7 @@ pub mod table1;
 /// names are the results contract (`--only` takes them).
 pub const EXPERIMENTS: &[Experiment] = &[
     kernels::EXPERIMENT,
-    Experiment::planned(
-        "accel",
-        "traversal speed, build time and memory per accel, ray kind and packet width",
-        "section 3 (two-level BSP)",
-        &["accel.csv"],
-        Some(3),
-    ),
+    accel::EXPERIMENT,
     table1::EXPERIMENT,
     Experiment::planned(
         "table2",

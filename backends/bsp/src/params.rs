@@ -1,0 +1,180 @@
+//! Build and traversal parameters of the two-level BSP, with presets (paper section 3: object
+//! trees "built carefully once", the top tree "built fast").
+
+/// Surface-area-heuristic parameters of the object (per-mesh) kd-trees, after Havran's thesis
+/// and Wald & Havran 2006.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SahParams {
+    /// Cost of visiting an inner node (K_T).
+    pub traversal_cost: f32,
+    /// Cost of one ray-triangle test (K_I).
+    pub intersection_cost: f32,
+    /// Cost reduction for a split that cuts off empty space (lambda = 1 - bonus when one side
+    /// holds nothing), in `[0, 1)`.
+    pub empty_bonus: f32,
+    /// Deepest leaf; 0 picks `8 + 1.3 log2(N)` (Havran), at most [`MAX_TREE_DEPTH`].
+    pub max_depth: u32,
+    /// Nodes with at most this many triangles become leaves without a split search.
+    pub leaf_size: u32,
+    /// Clip triangles straddling a split to each child ("perfect splits", Wald & Havran);
+    /// without it a straddling triangle keeps its bounding box cut by the child's box.
+    pub perfect_splits: bool,
+}
+
+/// The deepest any tree may be (the traversal stacks hold this many entries).
+pub const MAX_TREE_DEPTH: u32 = 60;
+
+impl Default for SahParams {
+    fn default() -> Self {
+        Self::default_preset()
+    }
+}
+
+impl SahParams {
+    /// Quick to build: no clipping, leaves of up to 8 triangles.
+    pub fn fast() -> Self {
+        Self {
+            leaf_size: 8,
+            perfect_splits: false,
+            ..Self::default_preset()
+        }
+    }
+
+    /// The recommended trade-off: Wald & Havran's costs (K_T 15, K_I 20, empty bonus 0.2)
+    /// with perfect splits, and no split search below 4 triangles.
+    ///
+    /// Measured (`trace` example, primary rays, 1024x768, thread CPU time): leaf size 4 was as
+    /// fast as 1 or faster at every width and scene, e.g. terrain 5.66 / 10.9 / 19.7 Mrays/s
+    /// (single / sse / pulp16) against 5.18 / 8.96 / 15.2 with leaf size 1, blob 6.91 / 16.4 /
+    /// 34.6 against 6.79 / 15.7 / 32.8, with half the nodes.
+    pub fn default_preset() -> Self {
+        Self {
+            traversal_cost: 15.0,
+            intersection_cost: 20.0,
+            empty_bonus: 0.2,
+            max_depth: 0,
+            leaf_size: 4,
+            perfect_splits: true,
+        }
+    }
+
+    /// The finest tree: splits searched down to single triangles, up to 60 levels deep. Slower
+    /// to build and larger; not faster to traverse in our measurements (see
+    /// [`Self::default_preset`]).
+    pub fn slow() -> Self {
+        Self {
+            leaf_size: 1,
+            max_depth: MAX_TREE_DEPTH,
+            ..Self::default_preset()
+        }
+    }
+
+    /// A preset by name: `fast`, `default`, `slow`.
+    pub fn preset(name: &str) -> Option<Self> {
+        match name {
+            "fast" => Some(Self::fast()),
+            "default" => Some(Self::default_preset()),
+            "slow" => Some(Self::slow()),
+            _ => None,
+        }
+    }
+
+    /// The depth limit for `n` triangles.
+    pub fn depth_limit(&self, n: usize) -> u32 {
+        let auto = || (8.0 + 1.3 * (n.max(1) as f64).log2()).round() as u32;
+        let d = if self.max_depth == 0 {
+            auto()
+        } else {
+            self.max_depth
+        };
+        d.min(MAX_TREE_DEPTH)
+    }
+}
+
+/// Parameters of the top-level tree over instance boxes: a binned SAH, rebuilt whenever
+/// instances move.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TopParams {
+    /// Candidate planes per axis: `bins - 1` bin boundaries.
+    pub bins: u32,
+    pub traversal_cost: f32,
+    /// Cost of entering an instance (transforming the rays, walking its tree).
+    pub intersection_cost: f32,
+    pub empty_bonus: f32,
+    /// 0 picks `8 + 1.3 log2(N)`.
+    pub max_depth: u32,
+    /// Nodes with at most this many instances become leaves.
+    pub leaf_size: u32,
+}
+
+// Measured (`trace top` / `trace spheres`, 1,025 instances, thread CPU / wall on the 2-core
+// dev machine): leaf size 1 rebuilt in 1.29 ms, 2 in 0.69 ms, 4 in 0.35 ms, with primary-ray
+// speed unchanged within noise (single 3.7-3.8, pulp16 8.8-9.0 Mrays/s); 8 bins instead of 16
+// saved less (0.82 ms). Default: 16 bins, leaf size 4.
+
+impl Default for TopParams {
+    fn default() -> Self {
+        Self {
+            bins: 16,
+            traversal_cost: 15.0,
+            intersection_cost: 60.0,
+            empty_bonus: 0.2,
+            max_depth: 0,
+            leaf_size: 4,
+        }
+    }
+}
+
+/// Everything the BSP takes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BspParams {
+    pub object: SahParams,
+    pub top: TopParams,
+    /// Per-ray intersection cache (mailbox): a triangle met again in a later leaf is not
+    /// retested.
+    pub mailbox: bool,
+    /// Packet traversal hands a subtree to single-ray traversal when its active lanes are
+    /// at most this many; `None` takes [`default_single_ray_threshold`] for the width.
+    pub single_ray_threshold: Option<u32>,
+}
+
+impl Default for BspParams {
+    fn default() -> Self {
+        Self {
+            object: SahParams::default(),
+            top: TopParams::default(),
+            mailbox: true,
+            single_ray_threshold: None,
+        }
+    }
+}
+
+impl BspParams {
+    /// The object-tree preset `name` (`fast`, `default`, `slow`) with default everything else.
+    pub fn preset(name: &str) -> Option<Self> {
+        Some(Self {
+            object: SahParams::preset(name)?,
+            ..Self::default()
+        })
+    }
+
+    /// The switch threshold in effect for packets of `lanes` lanes.
+    pub fn threshold_for(&self, lanes: usize) -> u32 {
+        self.single_ray_threshold
+            .unwrap_or_else(|| default_single_ray_threshold(lanes))
+    }
+}
+
+/// The measured best active-lane count at or below which a packet's subtree is traversed ray
+/// by ray, per packet width: 0 (never) at every width.
+///
+/// Measured by the `accel` experiment's sweep (`accel_threshold.csv`, thresholds 0 to
+/// width / 2, primary and diffuse rays, `room` and `blob`): 0 was best or within noise of the
+/// best everywhere, e.g. room primary at 256x192 (quick): width 4 (sse) 15.5 / 14.6 / 13.0
+/// Mrays/s for thresholds 0 / 1 / 2, width 16 (pulp16) 34.4 / 33.1 / 30.4 / 28.0 / 25.8 for
+/// 0 to 4. A kd-tree packet step with one active lane costs about what a single-ray step
+/// costs (a split test and a branch), while each switch pays for unpacking the lane, three
+/// divisions and a fresh mailbox, and switched subtrees are mostly small.
+pub fn default_single_ray_threshold(_lanes: usize) -> u32 {
+    0
+}

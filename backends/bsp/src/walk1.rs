@@ -1,0 +1,303 @@
+//! Single-ray traversal of the two-level BSP (paper section 3; the scalar path, and the path
+//! packets switch to when few lanes stay active): near/far order with an explicit stack,
+//! the intersection cache, early exit once the nearest hit is before the next node.
+
+use coherent_accel::aabb::slab1;
+use coherent_accel::triangle::xyzz;
+use coherent_accel::{Hit1, transform_point1, transform_vector1};
+use glam::Vec3;
+
+use crate::KdTree;
+use crate::bsp::{Bsp, MeshTree};
+use crate::counters::Counters;
+use crate::mailbox::Mailbox1;
+use crate::query::{LaneTask, Query1};
+use crate::stack::Stack;
+
+/// A ray prepared for traversal; vectors as `[x, y, z, z]`, indexed by an axis `& 3`.
+#[derive(Clone, Copy)]
+pub(crate) struct Ray1x {
+    pub o: [f32; 4],
+    pub d: [f32; 4],
+    /// `1 / d` per axis (infinite for zero components).
+    pub inv: [f32; 4],
+    pub tmin: f32,
+    /// Per axis 1 when the direction's sign bit is set: the right child is nearer.
+    pub neg: [usize; 4],
+}
+
+impl Ray1x {
+    #[inline(always)]
+    pub fn new(o: Vec3, d: Vec3, tmin: f32) -> Self {
+        let inv = Vec3::new(1.0 / d.x, 1.0 / d.y, 1.0 / d.z);
+        let neg = [d.x, d.y, d.z, d.z].map(|c| c.is_sign_negative() as usize);
+        Self {
+            o: xyzz(o),
+            d: xyzz(d),
+            inv: xyzz(inv),
+            tmin,
+            neg,
+        }
+    }
+
+    /// The part of the ray in `b`, cut to `[tmin, tmax]` and widened by [`SLACK`] (before the
+    /// emptiness test: a ray touching the box at a corner is inside).
+    #[inline(always)]
+    pub fn clip(&self, b: &coherent_accel::Aabb, tmax: f32) -> Option<(f32, f32)> {
+        let (mut t0, mut t1) = (self.tmin, tmax);
+        for k in 0..3 {
+            let (lo, hi) = slab1(self.o[k], self.inv[k], b.min[k], b.max[k]);
+            t0 = max1(lo, t0);
+            t1 = min1(hi, t1);
+        }
+        let (t0, t1) = (widen_lo(t0), widen_hi(t1));
+        (t0 <= t1).then_some((t0, t1))
+    }
+}
+
+/// Relative slack added to ray segments where a split or a box cuts them (2^-16): `ts` and
+/// the hit `t` are rounded differently, and a ray through a voxel corner must not skip the
+/// voxel it touches. Without it the equivalence tests found hits exactly at a vertex lying in
+/// two split planes missed; 2^-20 still missed one behind a scaling instance transform.
+pub(crate) const SLACK: f32 = 1.0 / (1 << 16) as f32;
+
+/// `x` moved down by [`SLACK`] relative.
+#[inline(always)]
+pub(crate) fn widen_lo(x: f32) -> f32 {
+    x - x.abs() * SLACK
+}
+
+/// `x` moved up by [`SLACK`] relative.
+#[inline(always)]
+pub(crate) fn widen_hi(x: f32) -> f32 {
+    x + x.abs() * SLACK
+}
+
+/// `max` with the x86 rule: a NaN `a` gives `b`.
+#[inline(always)]
+pub(crate) fn max1(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+/// `min` with the x86 rule: a NaN `a` gives `b`.
+#[inline(always)]
+pub(crate) fn min1(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
+/// Walks `tree` from node `start` over the ray segment `[tn, tf]`, calling `leaf` on each
+/// leaf's items in front-to-back order until it returns true (returns true then). Nodes
+/// entirely beyond `limit(s)` are skipped.
+///
+/// At a split with `ts = (split - o) / d`: the near child alone when `ts > tf`, the far one
+/// alone when `ts < tn`, else both. A NaN `ts` (a ray lying in the split plane) visits both
+/// with the whole segment.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn walk1<S, C: Counters>(
+    tree: &KdTree,
+    r: &Ray1x,
+    start: usize,
+    mut tn: f32,
+    mut tf: f32,
+    s: &mut S,
+    c: &mut C,
+    limit: impl Fn(&S) -> f32,
+    mut leaf: impl FnMut(&mut S, &mut C, &[u32]) -> bool,
+) -> bool {
+    let nodes = &tree.nodes[..];
+    let mut stack: Stack<(u32, f32, f32)> = Stack::new();
+    let mut node = start;
+    loop {
+        let n = nodes[node];
+        if !n.is_leaf() {
+            c.inner();
+            let k = n.axis() & 3;
+            let ts = (n.split() - r.o[k]) * r.inv[k];
+            let near = n.left() + r.neg[k];
+            let far = n.left() + 1 - r.neg[k];
+            if ts > tf {
+                node = near;
+            } else if ts < tn {
+                node = far;
+            } else {
+                stack.push((far as u32, widen_lo(max1(ts, tn)), tf));
+                node = near;
+                tf = widen_hi(min1(ts, tf));
+            }
+            continue;
+        }
+        c.leaf();
+        if leaf(s, c, &tree.items[n.items()]) {
+            return true;
+        }
+        loop {
+            let Some((next, a, b)) = stack.pop() else {
+                return false;
+            };
+            if a <= limit(s) {
+                (node, tn, tf) = (next as usize, a, b);
+                break;
+            }
+        }
+    }
+}
+
+/// Traverses one mesh's tree with an object-space ray, from node `start` over `[tn, tf]`
+/// (or, with `None`, from the root over the ray's part inside the mesh box). Returns true when
+/// the query finished.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn mesh1<Q: Query1, C: Counters>(
+    mesh: &MeshTree,
+    r: &Ray1x,
+    inst: u32,
+    start: Option<(usize, f32, f32)>,
+    mailbox: bool,
+    q: &mut Q,
+    c: &mut C,
+) -> bool {
+    let (node, tn, tf) = match start {
+        Some(s) => s,
+        None => match r.clip(&mesh.tree.bounds, q.limit()) {
+            Some((t0, t1)) => (0, t0, t1),
+            None => return false,
+        },
+    };
+    let mut mb = Mailbox1::new();
+    let tris = &mesh.tris[..];
+    walk1(
+        &mesh.tree,
+        r,
+        node,
+        tn,
+        tf,
+        q,
+        c,
+        #[inline(always)]
+        |q| q.limit(),
+        #[inline(always)]
+        |q, c, items| {
+            for &i in items {
+                if mailbox && mb.seen(i) {
+                    c.mailbox_skip(1);
+                    continue;
+                }
+                c.tri_test(1);
+                let tri = &tris[i as usize];
+                if let Some((t, u, v)) = tri.intersect1x(&r.o, &r.d, r.tmin, q.limit()) {
+                    let h = Hit1 {
+                        t,
+                        u,
+                        v,
+                        prim: tri.prim,
+                        inst,
+                    };
+                    if q.hit(h) {
+                        return true;
+                    }
+                }
+            }
+            false
+        },
+    )
+}
+
+/// A world-space ray through the whole scene (the ray must be valid).
+#[inline(always)]
+pub(crate) fn scene1<Q: Query1, C: Counters>(
+    bsp: &Bsp,
+    o: Vec3,
+    d: Vec3,
+    tmin: f32,
+    q: &mut Q,
+    c: &mut C,
+) {
+    let r = Ray1x::new(o, d, tmin);
+    let enter = |q: &mut Q, c: &mut C, i: u32| enter1(bsp, &r, (o, d), i, q, c);
+    let root = bsp.top.nodes[0];
+    if root.is_leaf() {
+        // Few instances: no top-level walk, each instance's box test culls.
+        for &i in &bsp.top.items[root.items()] {
+            if enter(q, c, i) {
+                return;
+            }
+        }
+        return;
+    }
+    let Some((t0, t1)) = r.clip(&bsp.top.bounds, q.limit()) else {
+        return;
+    };
+    let mut seen = Mailbox1::new();
+    walk1(
+        &bsp.top,
+        &r,
+        0,
+        t0,
+        t1,
+        q,
+        c,
+        #[inline(always)]
+        |q| q.limit(),
+        #[inline(always)]
+        |q, c, items| {
+            for &i in items {
+                if !seen.seen(i) && enter(q, c, i) {
+                    return true;
+                }
+            }
+            false
+        },
+    );
+}
+
+/// Instance `i` for the world-space ray `r` (`od`: its origin and direction).
+#[inline(always)]
+fn enter1<Q: Query1, C: Counters>(
+    bsp: &Bsp,
+    r: &Ray1x,
+    od: (Vec3, Vec3),
+    i: u32,
+    q: &mut Q,
+    c: &mut C,
+) -> bool {
+    let inst = &bsp.instances[i as usize];
+    let mesh = &bsp.meshes[inst.mesh as usize];
+    c.instance(1);
+    if inst.identity {
+        mesh1(mesh, r, i, None, bsp.params.mailbox, q, c)
+    } else {
+        let m = &inst.object_from_world;
+        let ro = Ray1x::new(
+            transform_point1(m, od.0),
+            transform_vector1(m, od.1),
+            r.tmin,
+        );
+        mesh1(mesh, &ro, i, None, bsp.params.mailbox, q, c)
+    }
+}
+
+/// One lane of a packet continuing ray by ray in a mesh subtree.
+pub(crate) struct MeshTask<'a, C: Counters> {
+    pub mesh: &'a MeshTree,
+    pub r: Ray1x,
+    pub inst: u32,
+    pub start: (usize, f32, f32),
+    pub mailbox: bool,
+    pub c: &'a mut C,
+}
+
+impl<C: Counters> LaneTask for MeshTask<'_, C> {
+    #[inline(always)]
+    fn run<Q: Query1>(&mut self, q: &mut Q) {
+        mesh1(
+            self.mesh,
+            &self.r,
+            self.inst,
+            Some(self.start),
+            self.mailbox,
+            q,
+            self.c,
+        );
+    }
+}

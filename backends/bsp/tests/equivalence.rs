@@ -1,0 +1,382 @@
+//! The two-level BSP against brute force (paper section 3): first hit, all hits and
+//! occlusion, single rays and packets of every lane backend, on random soups, random
+//! instance transforms and random rays, plus the edge cases.
+
+use coherent_accel::shapes::{Rng, icosphere, soup};
+use std::sync::OnceLock;
+
+use coherent_accel::testing::*;
+use coherent_accel::{Accel, BruteForce, Mesh, Ray1, Rays, Scene};
+use coherent_bsp::{Bsp, BspParams, SahParams};
+use coherent_simd::{Backend, Kernel, Lanes};
+use glam::Vec3;
+use proptest::prelude::*;
+
+/// Every preset and traversal switch the tests run under.
+fn param_sets(lanes: usize) -> Vec<BspParams> {
+    let mut v = vec![];
+    for (preset, mailbox, thr) in [
+        ("default", true, None),
+        ("fast", false, Some(0)),
+        ("slow", true, Some(lanes.div_ceil(2) as u32)),
+    ] {
+        let mut p = BspParams::preset(preset).unwrap();
+        p.mailbox = mailbox;
+        p.single_ray_threshold = thr;
+        v.push(p);
+    }
+    v
+}
+
+/// The edge cases, run for one lane backend.
+pub fn edge_cases<L: Lanes>(l: L) {
+    let check = |scene: &Scene, rays: &[Ray1]| {
+        for p in param_sets(L::N) {
+            let (bf, bsp) = build_both::<Bsp>(scene, &p);
+            check_all_queries(l, &bf, &bsp, rays, 1).unwrap();
+        }
+    };
+
+    // Empty scene, a scene whose only mesh is all degenerate.
+    let rays = random_rays(1, &Scene::default(), 16);
+    check(&Scene::default(), &rays);
+    let flat = Mesh::new(
+        "flat",
+        vec![Vec3::ZERO, Vec3::X, 2.0 * Vec3::X],
+        vec![[0, 1, 2]],
+    );
+    check(&Scene::single(flat), &rays);
+
+    // One triangle: axis-parallel rays through its vertices, edges and inside, and along it.
+    let tri = Scene::single(Mesh::new(
+        "one",
+        vec![
+            Vec3::ZERO,
+            Vec3::new(4.0, 0.0, 0.0),
+            Vec3::new(0.0, 4.0, 0.0),
+        ],
+        vec![[0, 1, 2]],
+    ));
+    let mut rays = vec![];
+    for p in [
+        Vec3::ZERO,
+        Vec3::new(2.0, 0.0, 0.0),
+        Vec3::new(2.0, 2.0, 0.0),
+        Vec3::ONE,
+    ] {
+        rays.push(Ray1::infinite(p + Vec3::Z, -Vec3::Z));
+        rays.push(Ray1::infinite(p - Vec3::Z, Vec3::Z));
+        rays.push(Ray1::infinite(p - Vec3::X, Vec3::X));
+        // Starting on the surface.
+        rays.push(Ray1::infinite(p, Vec3::new(0.3, 0.2, 1.0)));
+        rays.push(Ray1::infinite(p, Vec3::new(0.3, 0.2, -1.0)));
+    }
+    check(&tri, &rays);
+
+    // Bad rays: zero, NaN and infinite directions, NaN origins and bounds: misses.
+    let scene = random_scene(3, 200, 1, 2);
+    let o = Vec3::new(0.5, 0.5, -20.0);
+    let bad = [
+        Ray1::infinite(o, Vec3::ZERO),
+        Ray1::infinite(o, Vec3::new(f32::NAN, 0.0, 1.0)),
+        Ray1::infinite(o, Vec3::new(0.0, f32::INFINITY, 1.0)),
+        Ray1::infinite(Vec3::NAN, Vec3::Z),
+        Ray1::infinite(Vec3::new(f32::NEG_INFINITY, 0.0, 0.0), Vec3::X),
+        Ray1::new(o, Vec3::Z, f32::NAN, 1.0),
+        Ray1::new(o, Vec3::Z, 0.0, f32::NAN),
+        Ray1::new(o, Vec3::Z, 5.0, 1.0),
+        Ray1::infinite(o, Vec3::splat(1e-30)),
+    ];
+    for p in param_sets(L::N) {
+        let (bf, bsp) = build_both::<Bsp>(&scene, &p);
+        for r in &bad {
+            assert!(bsp.intersect1(r).is_none() && !bsp.occluded1(r));
+            let mut n = 0;
+            bsp.intersect_all1(r, &mut |_| n += 1);
+            assert_eq!(n, 0);
+        }
+        check_all_queries(l, &bf, &bsp, &bad, 2).unwrap();
+        // Bad lanes beside good ones.
+        let good = random_rays(4, &scene, 64);
+        let mixed: Vec<Ray1> = good
+            .iter()
+            .zip(bad.iter().cycle())
+            .flat_map(|(g, b)| [*b, *g])
+            .collect();
+        check_all_queries(l, &bf, &bsp, &mixed, 3).unwrap();
+    }
+
+    // Rays lying in split planes of the tree (axis-parallel, origin on the plane), and
+    // crossing splits exactly at vertices.
+    let scene = Scene::single(soup("grid", 300, 4.0, 1.5, 9));
+    let bsp = Bsp::build(&scene, &BspParams::default()).unwrap();
+    let tree = &bsp.mesh_trees()[0].tree;
+    let mut rng = Rng::new(5);
+    let mut rays = vec![];
+    for n in tree.nodes.iter().filter(|n| !n.is_leaf()).take(60) {
+        let k = n.axis();
+        let mut o = rng.vec3(Vec3::splat(-6.0), Vec3::splat(6.0));
+        o[k] = n.split();
+        let mut d = rng.unit_vector();
+        d[k] = 0.0;
+        rays.push(Ray1::infinite(o, d));
+        rays.push(Ray1::infinite(o, -d));
+        let mut e = Vec3::ZERO;
+        e[(k + 1) % 3] = 1.0;
+        rays.push(Ray1::infinite(o - 8.0 * e, e));
+    }
+    for v in scene.meshes[0].positions.iter().take(100) {
+        let o = rng.vec3(Vec3::splat(-9.0), Vec3::splat(9.0));
+        rays.push(Ray1::infinite(o, *v - o));
+    }
+    check(&scene, &rays);
+
+    // Coplanar axis-aligned geometry (many planar events at one position).
+    let mut tris = vec![];
+    for i in 0..10 {
+        for j in 0..10 {
+            let (x, y) = (i as f32, j as f32);
+            tris.push([
+                Vec3::new(x, y, 0.0),
+                Vec3::new(x + 1.0, y, 0.0),
+                Vec3::new(x, y + 1.0, 0.0),
+            ]);
+            tris.push([
+                Vec3::new(x, 0.0, y),
+                Vec3::new(x + 1.0, 0.0, y),
+                Vec3::new(x, 0.0, y + 1.0),
+            ]);
+        }
+    }
+    let scene = Scene::single(Mesh::from_triangles("planes", &tris));
+    let mut rays = random_rays(6, &scene, 200);
+    rays.push(Ray1::infinite(Vec3::new(-1.0, 0.0, 0.5), Vec3::X)); // in the plane y = 0
+    rays.push(Ray1::infinite(Vec3::new(0.5, 0.5, -1.0), Vec3::Z));
+    check(&scene, &rays);
+}
+
+/// Random scenes that once failed (seed, triangles, meshes, instances): a vertex on the mesh
+/// box's corner, a needle triangle, a vertex in two split planes behind a scaling transform.
+const REGRESSIONS: [(u64, usize, usize, usize); 3] = [
+    (11532196785894520903, 4, 2, 1),
+    (5172459823018468742, 54, 2, 5),
+    (667622533911027691, 273, 3, 1),
+];
+
+pub fn regressions<L: Lanes>(l: L) {
+    for (seed, tris, meshes, instances) in REGRESSIONS {
+        let scene = random_scene(seed, tris, meshes, instances);
+        let rays = random_rays(seed, &scene, 96);
+        for p in param_sets(L::N) {
+            let (bf, bsp) = build_both::<Bsp>(&scene, &p);
+            check_all_queries(l, &bf, &bsp, &rays, seed).unwrap();
+        }
+    }
+}
+
+/// 10^5 triangles: built once, 64 rays against brute force per backend.
+pub fn large_scene<L: Lanes>(l: L) {
+    static LARGE: OnceLock<(BruteForce, Bsp, Vec<Ray1>)> = OnceLock::new();
+    let (bf, bsp, rays) = LARGE.get_or_init(|| {
+        let scene = Scene::single(soup("big", 100_000, 20.0, 0.8, 11));
+        let rays = random_rays(12, &scene, 64);
+        let (bf, bsp) = build_both::<Bsp>(&scene, &BspParams::default());
+        (bf, bsp, rays)
+    });
+    assert_eq!(bsp.stats().triangles, 100_000);
+    check_all_queries(l, bf, bsp, rays, 13).unwrap();
+}
+
+/// Moving instances and rebuilding the top level answers as a fresh build does.
+pub fn moving_instances<L: Lanes>(l: L, seed: u64) {
+    let scene = random_scene(seed, 120, 2, 5);
+    let mut moved = random_scene(seed ^ 77, 120, 2, 6);
+    moved.meshes = scene.meshes.clone();
+    for i in &mut moved.instances {
+        i.mesh %= scene.meshes.len();
+    }
+    let p = BspParams::default();
+    let mut bsp = Bsp::build(&scene, &p).unwrap();
+    bsp.set_instances(&moved.instances).unwrap();
+    let fresh = Bsp::build(&moved, &p).unwrap();
+    let rays = random_rays(seed, &moved, 256);
+    for r in &rays {
+        assert_eq!(bsp.intersect1(r), fresh.intersect1(r), "{r:?}");
+        assert_eq!(bsp.occluded1(r), fresh.occluded1(r));
+    }
+    for c in rays.chunks(L::N) {
+        let p = Rays::from_fn(l, |i| c[i % c.len()]);
+        let all = l.splat_mask(true);
+        let (a, b) = (bsp.intersect(l, &p, all), fresh.intersect(l, &p, all));
+        for i in 0..L::N {
+            assert_eq!(a.lane(i), b.lane(i));
+        }
+    }
+    let (bf, _) = build_both::<Bsp>(&moved, &p);
+    check_all_queries(l, &bf, &bsp, &rays, seed).unwrap();
+    // A bad instance list is refused and names the instance.
+    let mut bad = moved.instances.clone();
+    bad[2].mesh = 9;
+    let e = bsp.set_instances(&bad).unwrap_err().to_string();
+    assert!(e.contains("instance 2"), "{e}");
+}
+
+struct EdgeCases;
+impl Kernel for EdgeCases {
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) {
+        edge_cases(l)
+    }
+}
+
+struct Regressions;
+impl Kernel for Regressions {
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) {
+        regressions(l)
+    }
+}
+
+struct LargeScene;
+impl Kernel for LargeScene {
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) {
+        large_scene(l)
+    }
+}
+
+struct MovingInstances;
+impl Kernel for MovingInstances {
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) {
+        for seed in 0..4 {
+            moving_instances(l, seed);
+        }
+    }
+}
+
+/// One random scene, random rays, one parameter set.
+struct RandomScene {
+    seed: u64,
+    tris: usize,
+    meshes: usize,
+    instances: usize,
+    preset: usize,
+}
+impl Kernel for RandomScene {
+    type Output = Result<(), String>;
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) -> Result<(), String> {
+        let scene = random_scene(self.seed, self.tris, self.meshes, self.instances);
+        let rays = random_rays(self.seed, &scene, 96);
+        let p = param_sets(L::N).swap_remove(self.preset);
+        let (bf, bsp) = build_both::<Bsp>(&scene, &p);
+        check_all_queries(l, &bf, &bsp, &rays, self.seed)
+    }
+}
+
+/// Random scenes per backend: 24, or `PROPTEST_CASES` when set (for longer hunts).
+fn cases() -> u32 {
+    std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(24)
+}
+
+/// Runs `k` on backend `b`, or says why it is skipped (`None`).
+fn on<K: Kernel>(b: Backend, k: K) -> Option<K::Output> {
+    match b.unavailable_reason() {
+        Some(why) => {
+            eprintln!("skipping backend {}: {why}", b.name());
+            None
+        }
+        None => Some(b.run(k).unwrap()),
+    }
+}
+
+/// Stamps the tests out for one lane backend.
+macro_rules! bsp_tests {
+    ($name:ident, $backend:expr) => {
+        mod $name {
+            use super::*;
+            const B: Backend = $backend;
+
+            #[test]
+            fn edge_cases() {
+                on(B, EdgeCases);
+            }
+
+            #[test]
+            fn large_scene() {
+                on(B, LargeScene);
+            }
+
+            #[test]
+            fn regressions() {
+                on(B, Regressions);
+            }
+
+            #[test]
+            fn moving_instances() {
+                on(B, MovingInstances);
+            }
+
+            proptest! {
+                #![proptest_config(ProptestConfig { cases: cases(), ..ProptestConfig::default() })]
+
+                #[test]
+                fn random_scenes_match_brute_force(
+                    seed in any::<u64>(),
+                    tris in 1usize..400,
+                    meshes in 1usize..4,
+                    instances in 0usize..7,
+                    preset in 0usize..3,
+                ) {
+                    let k = RandomScene { seed, tris, meshes, instances, preset };
+                    if let Some(r) = on(B, k) {
+                        r.map_err(TestCaseError::fail)?;
+                    }
+                }
+            }
+        }
+    };
+}
+
+bsp_tests!(scalar, Backend::Scalar);
+bsp_tests!(sse, Backend::Sse);
+bsp_tests!(wide4, Backend::Wide4);
+bsp_tests!(wide8, Backend::Wide8);
+bsp_tests!(wide16, Backend::Wide16);
+bsp_tests!(pulp8, Backend::Pulp8);
+bsp_tests!(pulp16, Backend::Pulp16);
+
+#[test]
+fn object_presets_differ() {
+    let s = Scene::single(icosphere("ico", Vec3::ZERO, 1.0, 4));
+    let fast = Bsp::build(
+        &s,
+        &BspParams {
+            object: SahParams::fast(),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let slow = Bsp::build(
+        &s,
+        &BspParams {
+            object: SahParams::slow(),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(
+        fast.stats().nodes < slow.stats().nodes,
+        "{:?} {:?}",
+        fast.stats(),
+        slow.stats()
+    );
+}
