@@ -2,3 +2,8 @@
 //! Graphicon 2005.
 
 pub use coherent_simd as simd;
+
+#[cfg(feature = "embree")]
+pub use coherent_embree as embree;
+#[cfg(feature = "obvhs")]
+pub use coherent_obvhs as obvhs;

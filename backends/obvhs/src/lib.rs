@@ -1,0 +1,1 @@
+//! obvhs BVH2 and CWBVH behind the traversal interface (paper section 3 comparison).

@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# The project's tests, set-up included: fetches the pinned native pieces (Embree, meshes),
+# then runs the whole workspace's tests with the default features and with none.
+# Usage: scripts/test.sh [extra cargo test arguments]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+python3 scripts/native.py
+cargo test --workspace "$@"
+cargo test --workspace --no-default-features "$@"
