@@ -1,1 +1,17 @@
-//! obvhs BVH2 and CWBVH behind the traversal interface (paper section 3 comparison).
+//! obvhs BVH2 and CWBVH behind the project's traversal interface: the BVHs people use
+//! today, measured against the paper's two-level BSP (section 3) across the same boundary.
+//!
+//! obvhs traverses one ray at a time, so a packet is served lane by lane (the results say
+//! so); instances go through per-mesh trees and a top tree, with the rays moved into each
+//! instance's space here (obvhs' own TLAS traversal does not transform rays).
+
+mod error;
+mod scene;
+mod tree;
+
+#[cfg(test)]
+mod tests;
+
+pub use error::ObvhsError;
+pub use scene::{BuildParams, Hit1, InstanceRef, MeshRef, ObvhsScene, Ray1};
+pub use tree::{Kind, Preset, Tree};
