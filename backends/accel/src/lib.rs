@@ -1,1 +1,33 @@
-//! The traversal interface (paper section 3). Filled in by the two-level BSP issue.
+//! `coherent-accel`: the traversal interface of the ray tracer (paper section 3). Scenes of
+//! triangle meshes placed by instance transforms go in; first hits, all hits and occlusion
+//! come out, for single rays and for packets of rays under a mask of active lanes.
+//!
+//! - [`Scene`], [`Mesh`], [`Instance`]: the input, validated at build time ([`AccelError`]).
+//! - [`Ray1`]/[`Hit1`] and [`Rays`]/[`Hits`]: single-ray and packet queries.
+//! - [`Accel`]: the interface every accelerator implements (BSP, Embree, obvhs), and
+//!   [`BuildStats`].
+//! - [`TriAccel`]: the projection ray-triangle test shared by the accelerators of this family.
+//! - [`BruteForce`]: the reference implementation for tests.
+
+pub mod aabb;
+pub mod accel;
+pub mod brute;
+pub mod error;
+pub mod instance;
+pub mod mesh;
+pub mod packet;
+pub mod ray;
+pub mod scene;
+pub mod shapes;
+pub mod triangle;
+
+pub use aabb::Aabb;
+pub use accel::{Accel, BuildStats};
+pub use brute::BruteForce;
+pub use error::AccelError;
+pub use instance::Instance;
+pub use mesh::Mesh;
+pub use packet::{Hits, Rays, Vec3s};
+pub use ray::{Hit1, Ray1, transform_point1, transform_vector1};
+pub use scene::Scene;
+pub use triangle::{EDGE_EPS, TriAccel};

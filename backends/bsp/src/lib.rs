@@ -1,1 +1,36 @@
-//! The paper's two-level BSP (section 3). Filled in by the two-level BSP issue.
+//! `coherent-bsp`: the paper's two-level BSP (section 3) with packet and single-ray
+//! traversal.
+//!
+//! - Object level: a surface-area-heuristic kd-tree per mesh, built in O(N log N) with sorted
+//!   split events and perfect splits (Wald & Havran 2006; Havran's thesis), [`build_sah`],
+//!   with parameters and presets in [`SahParams`].
+//! - Top level: a binned-SAH kd-tree over the instances' world boxes, [`build_top`], rebuilt
+//!   by [`coherent_accel::Accel::set_instances`] without touching the mesh trees.
+//! - 8-byte [`Node`]s with both children adjacent; triangles as projection-test records
+//!   ([`coherent_accel::TriAccel`]); degenerate triangles dropped and counted.
+//! - Traversal: single-ray (`walk1`) with a per-ray intersection cache, and packets (`walk`)
+//!   split by direction signs, near/far with a stack and masks, switching to single rays
+//!   below a threshold of active lanes ([`BspParams::single_ray_threshold`]).
+
+mod bsp;
+mod build_sah;
+mod build_top;
+mod clip;
+mod counters;
+mod mailbox;
+mod node;
+mod params;
+mod query;
+mod stack;
+mod tree;
+mod walk;
+mod walk1;
+
+pub use bsp::{Bsp, MeshTree};
+pub use build_sah::build_sah;
+pub use build_top::build_top;
+pub use clip::clipped_bounds;
+pub use counters::TraversalStats;
+pub use node::{MAX_INDEX, Node};
+pub use params::{BspParams, MAX_TREE_DEPTH, SahParams, TopParams, default_single_ray_threshold};
+pub use tree::{KdTree, TreeStats};

@@ -68,6 +68,7 @@ pub trait Lanes: Copy + Debug + Send + Sync + 'static {
 
     /// Lanes from a function of the lane index (packing, tests; not for hot loops).
     #[inline(always)]
+    #[allow(clippy::wrong_self_convention)] // a token method: the token proves the backend
     fn from_fn(self, mut f: impl FnMut(usize) -> f32) -> Self::F32s {
         let mut buf = [0.0f32; MAX_LANES];
         for (i, v) in buf.iter_mut().enumerate().take(Self::N) {
@@ -77,6 +78,7 @@ pub trait Lanes: Copy + Debug + Send + Sync + 'static {
     }
     /// Lanes from a function of the lane index (packing, tests; not for hot loops).
     #[inline(always)]
+    #[allow(clippy::wrong_self_convention)]
     fn from_fn_i32(self, mut f: impl FnMut(usize) -> i32) -> Self::I32s {
         let mut buf = [0i32; MAX_LANES];
         for (i, v) in buf.iter_mut().enumerate().take(Self::N) {

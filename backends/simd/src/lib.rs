@@ -5,7 +5,21 @@
 //! [`Backend::run`]. The backends are sibling modules; [`dispatch`] is the only place that
 //! names them all.
 
+pub mod approx;
 pub mod lanes;
 pub mod scalar;
+pub mod slices;
+pub mod vec3;
 
 pub use lanes::{Lanes, MAX_LANES, SimdF32, SimdI32, SimdMask};
+pub use vec3::{Rgbs, Vec3s};
+#[cfg(all(feature = "pulp", target_arch = "x86_64"))]
+pub mod pulp;
+#[cfg(all(feature = "sse", target_arch = "x86_64"))]
+pub mod sse;
+#[cfg(feature = "wide")]
+pub mod wide;
+
+pub mod dispatch;
+
+pub use dispatch::{Backend, BackendError, Kernel};

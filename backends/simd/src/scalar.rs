@@ -75,7 +75,7 @@ pub(crate) fn gather_index(i: i32, len: usize) -> usize {
 #[inline(always)]
 pub(crate) fn f32_to_i32_x86(x: f32) -> i32 {
     // 2^31 is exactly representable; anything at or above it (or NaN) is out of range.
-    if x.is_nan() || x >= 2147483648.0 || x < -2147483648.0 {
+    if !(-2147483648.0..2147483648.0).contains(&x) {
         i32::MIN
     } else {
         x as i32
@@ -85,7 +85,8 @@ pub(crate) fn f32_to_i32_x86(x: f32) -> i32 {
 /// The reference `floor`/`round` rule for values that are already integers, inf or NaN.
 #[inline(always)]
 fn integral_or_special(x: f32) -> bool {
-    !(x.abs() < 8388608.0) // 2^23; also true for NaN
+    // 2^23; also true for NaN.
+    x.abs().partial_cmp(&8388608.0) != Some(core::cmp::Ordering::Less)
 }
 
 impl SimdF32 for f32 {

@@ -1,0 +1,216 @@
+//! Packets of rays and hits, one ray per lane (paper section 3: rays are traced `N` at a time
+//! under a mask of active lanes).
+
+use coherent_simd::{Lanes, SimdF32, SimdI32, SimdMask};
+use glam::{Affine3A, Vec3};
+
+use crate::{Hit1, Ray1};
+
+/// One 3-vector per lane (structure of arrays).
+///
+/// A stand-in until `coherent_simd` has its own `Vec3s`: only what the traversal interface
+/// needs.
+#[derive(Debug, Clone, Copy)]
+pub struct Vec3s<L: Lanes> {
+    pub x: L::F32s,
+    pub y: L::F32s,
+    pub z: L::F32s,
+}
+
+impl<L: Lanes> Vec3s<L> {
+    #[inline(always)]
+    pub fn new(x: L::F32s, y: L::F32s, z: L::F32s) -> Self {
+        Self { x, y, z }
+    }
+
+    /// `v` in every lane.
+    #[inline(always)]
+    pub fn splat(l: L, v: Vec3) -> Self {
+        Self::new(l.splat(v.x), l.splat(v.y), l.splat(v.z))
+    }
+
+    /// Lanes from a function of the lane index (packing, tests).
+    #[inline(always)]
+    pub fn from_fn(l: L, mut f: impl FnMut(usize) -> Vec3) -> Self {
+        let mut buf = [Vec3::ZERO; coherent_simd::MAX_LANES];
+        for (i, v) in buf.iter_mut().enumerate().take(L::N) {
+            *v = f(i);
+        }
+        Self::new(
+            l.from_fn(|i| buf[i].x),
+            l.from_fn(|i| buf[i].y),
+            l.from_fn(|i| buf[i].z),
+        )
+    }
+
+    /// Lane `i` (slow: unpacking, tests).
+    #[inline(always)]
+    pub fn lane(&self, i: usize) -> Vec3 {
+        Vec3::new(self.x.lane(i), self.y.lane(i), self.z.lane(i))
+    }
+
+    /// Component `axis` (0, 1 or 2).
+    #[inline(always)]
+    pub fn axis(&self, axis: usize) -> L::F32s {
+        match axis {
+            0 => self.x,
+            1 => self.y,
+            _ => self.z,
+        }
+    }
+
+    #[inline(always)]
+    pub fn dot(&self, o: &Self) -> L::F32s {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+}
+
+/// A packet of rays: lane `i` is the ray `origin[i] + t * dir[i]`, `t` in `[tmin[i], tmax[i])`.
+/// Invalid lanes (see [`Ray1`]) are misses.
+#[derive(Debug, Clone, Copy)]
+pub struct Rays<L: Lanes> {
+    pub origin: Vec3s<L>,
+    pub dir: Vec3s<L>,
+    pub tmin: L::F32s,
+    pub tmax: L::F32s,
+}
+
+impl<L: Lanes> Rays<L> {
+    /// Packs one ray per lane.
+    #[inline(always)]
+    pub fn from_fn(l: L, mut f: impl FnMut(usize) -> Ray1) -> Self {
+        let mut buf = [Ray1::infinite(Vec3::ZERO, Vec3::X); coherent_simd::MAX_LANES];
+        for (i, r) in buf.iter_mut().enumerate().take(L::N) {
+            *r = f(i);
+        }
+        Self {
+            origin: Vec3s::from_fn(l, |i| buf[i].origin),
+            dir: Vec3s::from_fn(l, |i| buf[i].dir),
+            tmin: l.from_fn(|i| buf[i].tmin),
+            tmax: l.from_fn(|i| buf[i].tmax),
+        }
+    }
+
+    /// Lane `i` (slow: unpacking, tests).
+    #[inline(always)]
+    pub fn lane(&self, i: usize) -> Ray1 {
+        Ray1::new(
+            self.origin.lane(i),
+            self.dir.lane(i),
+            self.tmin.lane(i),
+            self.tmax.lane(i),
+        )
+    }
+
+    /// Lanes holding a valid ray (the rule of [`Ray1::is_valid`], lane by lane).
+    #[inline(always)]
+    pub fn valid(&self, l: L) -> L::Mask {
+        let zero = l.splat(0.0);
+        let inf = l.splat(f32::INFINITY);
+        // False for NaN and both infinities.
+        let finite = |v: L::F32s| v.abs().lt(inf);
+        let o = &self.origin;
+        let d = &self.dir;
+        finite(o.x)
+            & finite(o.y)
+            & finite(o.z)
+            & finite(d.x)
+            & finite(d.y)
+            & finite(d.z)
+            & d.dot(d).gt(zero)
+            & self.tmin.le(self.tmax)
+    }
+
+    /// The rays in the space `m` maps to, with the arithmetic of [`Ray1::transformed`].
+    #[inline(always)]
+    pub fn transformed(&self, l: L, m: &Affine3A) -> Self {
+        let t = m.translation;
+        let d = transform_vector(l, m, &self.dir);
+        let o = transform_vector(l, m, &self.origin);
+        Self {
+            origin: Vec3s::new(o.x + t.x, o.y + t.y, o.z + t.z),
+            dir: d,
+            tmin: self.tmin,
+            tmax: self.tmax,
+        }
+    }
+}
+
+#[inline(always)]
+fn transform_vector<L: Lanes>(l: L, m: &Affine3A, v: &Vec3s<L>) -> Vec3s<L> {
+    let (a, b, c) = (m.matrix3.x_axis, m.matrix3.y_axis, m.matrix3.z_axis);
+    let row = |ax: f32, bx: f32, cx: f32| l.splat(ax) * v.x + l.splat(bx) * v.y + l.splat(cx) * v.z;
+    Vec3s::new(row(a.x, b.x, c.x), row(a.y, b.y, c.y), row(a.z, b.z, c.z))
+}
+
+/// The first hits of a packet: per lane `t` (`+inf` on a miss), barycentrics `u`, `v`,
+/// triangle `prim` and instance `inst` (both `-1` on a miss). See [`Hit1`].
+#[derive(Debug, Clone, Copy)]
+pub struct Hits<L: Lanes> {
+    pub t: L::F32s,
+    pub u: L::F32s,
+    pub v: L::F32s,
+    pub prim: L::I32s,
+    pub inst: L::I32s,
+}
+
+impl<L: Lanes> Hits<L> {
+    /// Every lane a miss.
+    #[inline(always)]
+    pub fn miss(l: L) -> Self {
+        Self {
+            t: l.splat(f32::INFINITY),
+            u: l.splat(0.0),
+            v: l.splat(0.0),
+            prim: l.splat_i32(-1),
+            inst: l.splat_i32(-1),
+        }
+    }
+
+    /// Lanes that hit something.
+    #[inline(always)]
+    pub fn hit_mask(&self, l: L) -> L::Mask {
+        self.prim.gt(l.splat_i32(-1))
+    }
+
+    /// Lane `i` (slow: unpacking, tests).
+    #[inline(always)]
+    pub fn lane(&self, i: usize) -> Option<Hit1> {
+        let prim = self.prim.lane(i);
+        (prim >= 0).then(|| Hit1 {
+            t: self.t.lane(i),
+            u: self.u.lane(i),
+            v: self.v.lane(i),
+            prim: prim as u32,
+            inst: self.inst.lane(i) as u32,
+        })
+    }
+
+    /// Packs one optional hit per lane (packet forms built on single-ray queries).
+    #[inline(always)]
+    pub fn from_fn(l: L, mut f: impl FnMut(usize) -> Option<Hit1>) -> Self {
+        let mut buf = [None; coherent_simd::MAX_LANES];
+        for (i, h) in buf.iter_mut().enumerate().take(L::N) {
+            *h = f(i);
+        }
+        Self {
+            t: l.from_fn(|i| buf[i].map_or(f32::INFINITY, |h| h.t)),
+            u: l.from_fn(|i| buf[i].map_or(0.0, |h| h.u)),
+            v: l.from_fn(|i| buf[i].map_or(0.0, |h| h.v)),
+            prim: l.from_fn_i32(|i| buf[i].map_or(-1, |h| h.prim as i32)),
+            inst: l.from_fn_i32(|i| buf[i].map_or(-1, |h| h.inst as i32)),
+        }
+    }
+
+    /// Takes `o`'s lanes where `m` is on.
+    #[inline(always)]
+    pub fn select(m: L::Mask, o: &Self, s: &Self) -> Self {
+        Self {
+            t: m.select(o.t, s.t),
+            u: m.select(o.u, s.u),
+            v: m.select(o.v, s.v),
+            prim: m.select_i32(o.prim, s.prim),
+            inst: m.select_i32(o.inst, s.inst),
+        }
+    }
+}

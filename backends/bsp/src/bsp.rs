@@ -1,0 +1,331 @@
+//! The two-level BSP of paper section 3: a kd-tree per mesh (built once, carefully) and a
+//! kd-tree over the instances' world boxes (rebuilt fast when instances move).
+
+use std::time::Instant;
+
+use coherent_accel::{
+    Accel, AccelError, BuildStats, Hit1, Hits, Instance, Ray1, Rays, Scene, TriAccel,
+    scene::validate_instances,
+};
+use coherent_simd::Lanes;
+use glam::{Affine3A, Vec3};
+
+use crate::counters::{Counters, TraversalStats};
+use crate::query::{All1, AllP, Any1, AnyP, First1, FirstP};
+use crate::{BspParams, KdTree, build_sah, build_top};
+
+/// One mesh's kd-tree and triangle records (leaf items index `tris`).
+#[derive(Debug, Clone)]
+pub struct MeshTree {
+    pub tree: KdTree,
+    pub tris: Vec<TriAccel>,
+    /// Degenerate triangles dropped.
+    pub degenerate: usize,
+}
+
+impl MeshTree {
+    /// Builds the tree of one mesh's positions and triangles (validated).
+    ///
+    /// The tree is built over each triangle grown about its centroid by
+    /// [`HIT_REGION_SCALE`]: the projection test accepts points up to
+    /// [`coherent_accel::EDGE_EPS`] outside the edges, and the leaves must hold every triangle
+    /// whose accepted region reaches them, or a ray could hit a triangle in a leaf that does
+    /// not list it and the traversal would miss that hit.
+    pub fn build(positions: &[Vec3], indices: &[[u32; 3]], p: &crate::SahParams) -> Self {
+        let mut tris = Vec::with_capacity(indices.len());
+        let mut verts = Vec::with_capacity(indices.len());
+        for (i, t) in indices.iter().enumerate() {
+            let v = t.map(|j| positions[j as usize]);
+            if let Some(rec) = TriAccel::new(v, i as u32) {
+                tris.push(rec);
+                verts.push(hit_region(v));
+            }
+        }
+        Self {
+            tree: build_sah(&verts, p),
+            degenerate: indices.len() - tris.len(),
+            tris,
+        }
+    }
+
+    pub fn memory_bytes(&self) -> usize {
+        self.tree.memory_bytes() + self.tris.len() * size_of::<TriAccel>()
+    }
+}
+
+/// How much a triangle is grown about its centroid for the build. The test's accepted region
+/// `u, v, 1 - u - v >= -EDGE_EPS` is the triangle scaled by `1 + 3 EDGE_EPS`; one more
+/// `EDGE_EPS` covers the rounding of the hit point.
+pub const HIT_REGION_SCALE: f64 = 1.0 + 4.0 * coherent_accel::EDGE_EPS as f64;
+
+/// Triangle `v` grown by [`HIT_REGION_SCALE`] about its centroid, rounded away from it.
+fn hit_region(v: [Vec3; 3]) -> [Vec3; 3] {
+    let d = v.map(|p| p.as_dvec3());
+    let c = (d[0] + d[1] + d[2]) / 3.0;
+    d.map(|p| {
+        let g = c + (p - c) * HIT_REGION_SCALE;
+        Vec3::from_array([0, 1, 2].map(|k| {
+            let f = g[k] as f32;
+            if (f as f64) < g[k] && g[k] > c[k] {
+                f.next_up()
+            } else if (f as f64) > g[k] && g[k] < c[k] {
+                f.next_down()
+            } else {
+                f
+            }
+        }))
+    })
+}
+
+/// An instance as the traversal needs it.
+#[derive(Debug, Clone)]
+pub(crate) struct InstanceData {
+    pub object_from_world: Affine3A,
+    pub mesh: u32,
+    /// The transform is the identity: rays need not be moved.
+    pub identity: bool,
+}
+
+/// The paper's two-level BSP. Build with [`Accel::build`]; query through [`Accel`].
+#[derive(Debug, Clone)]
+pub struct Bsp {
+    pub(crate) params: BspParams,
+    pub(crate) meshes: Vec<MeshTree>,
+    pub(crate) instances: Vec<InstanceData>,
+    pub(crate) top: KdTree,
+    world_from_object: Vec<Affine3A>,
+    mesh_ids: Vec<usize>,
+    stats: BuildStats,
+}
+
+impl Bsp {
+    pub fn params(&self) -> &BspParams {
+        &self.params
+    }
+
+    /// Changes the traversal-only parameters (mailbox, switch threshold) without a rebuild.
+    pub fn set_traversal_params(&mut self, mailbox: bool, single_ray_threshold: Option<u32>) {
+        self.params.mailbox = mailbox;
+        self.params.single_ray_threshold = single_ray_threshold;
+    }
+
+    /// The mesh trees.
+    pub fn mesh_trees(&self) -> &[MeshTree] {
+        &self.meshes
+    }
+
+    /// The top-level tree.
+    pub fn top_tree(&self) -> &KdTree {
+        &self.top
+    }
+
+    /// [`Accel::intersect1`], counting what the traversal did into `c`.
+    pub fn intersect1_counted(&self, ray: &Ray1, c: &mut TraversalStats) -> Option<Hit1> {
+        self.first1(ray, c)
+    }
+
+    /// [`Accel::intersect`], counting what the traversal did into `c`.
+    pub fn intersect_counted<L: Lanes>(
+        &self,
+        l: L,
+        rays: &Rays<L>,
+        active: L::Mask,
+        c: &mut TraversalStats,
+    ) -> Hits<L> {
+        self.first(l, rays, active, c)
+    }
+
+    #[inline(always)]
+    fn first1<C: Counters>(&self, ray: &Ray1, c: &mut C) -> Option<Hit1> {
+        if !ray.is_valid() {
+            return None;
+        }
+        let mut q = First1 {
+            tmax: ray.tmax,
+            best: None,
+        };
+        crate::walk1::scene1(self, ray.origin, ray.dir, ray.tmin, &mut q, c);
+        q.best
+    }
+
+    #[inline(always)]
+    fn first<L: Lanes, C: Counters>(
+        &self,
+        l: L,
+        rays: &Rays<L>,
+        active: L::Mask,
+        c: &mut C,
+    ) -> Hits<L> {
+        let mut q = FirstP {
+            best: rays.tmax,
+            hits: Hits::miss(l),
+        };
+        crate::walk::scene_packet(l, self, rays, active, &mut q, c);
+        q.hits
+    }
+
+    fn build_top_level(&mut self, instances: &[Instance]) -> Result<(), AccelError> {
+        let t0 = Instant::now();
+        let inverse = validate_instances(instances, self.meshes.len())?;
+        let boxes: Vec<_> = instances
+            .iter()
+            .map(|i| {
+                self.meshes[i.mesh]
+                    .tree
+                    .bounds
+                    .transformed(&i.world_from_object)
+            })
+            .collect();
+        self.top = build_top(&boxes, &self.params.top);
+        self.instances = instances
+            .iter()
+            .zip(inverse)
+            .map(|(i, inv)| InstanceData {
+                object_from_world: inv,
+                mesh: i.mesh as u32,
+                identity: i.world_from_object == Affine3A::IDENTITY,
+            })
+            .collect();
+        self.world_from_object = instances.iter().map(|i| i.world_from_object).collect();
+        self.mesh_ids = instances.iter().map(|i| i.mesh).collect();
+        self.stats.top_build_seconds = t0.elapsed().as_secs_f64();
+        self.stats.instances = instances.len();
+        self.refresh_stats();
+        Ok(())
+    }
+
+    fn refresh_stats(&mut self) {
+        let s = &mut self.stats;
+        let trees = self.meshes.iter().map(|m| &m.tree).chain([&self.top]);
+        (s.nodes, s.leaves, s.empty_leaves, s.leaf_refs, s.max_depth) = (0, 0, 0, 0, 0);
+        for t in trees {
+            s.nodes += t.stats.nodes;
+            s.leaves += t.stats.leaves;
+            s.empty_leaves += t.stats.empty_leaves;
+            s.leaf_refs += t.stats.leaf_refs;
+            s.max_depth = s.max_depth.max(t.stats.max_depth);
+        }
+        s.extra = vec![
+            (
+                "object_sah_cost_sum".into(),
+                self.meshes.iter().map(|m| m.tree.stats.sah_cost).sum(),
+            ),
+            ("top_sah_cost".into(), self.top.stats.sah_cost),
+            ("top_nodes".into(), self.top.stats.nodes as f64),
+        ];
+        self.stats.memory_bytes = self.memory_bytes();
+    }
+}
+
+impl Accel for Bsp {
+    type Params = BspParams;
+
+    fn build(scene: &Scene, params: &BspParams) -> Result<Self, AccelError> {
+        let t0 = Instant::now();
+        for (i, m) in scene.meshes.iter().enumerate() {
+            m.validate(i)?;
+        }
+        let meshes: Vec<MeshTree> = scene
+            .meshes
+            .iter()
+            .map(|m| MeshTree::build(&m.positions, &m.indices, &params.object))
+            .collect();
+        let mut bsp = Bsp {
+            params: params.clone(),
+            stats: BuildStats {
+                triangles: meshes.iter().map(|m| m.tris.len()).sum(),
+                degenerate: meshes.iter().map(|m| m.degenerate).sum(),
+                ..BuildStats::default()
+            },
+            meshes,
+            instances: Vec::new(),
+            top: KdTree::empty(),
+            world_from_object: Vec::new(),
+            mesh_ids: Vec::new(),
+        };
+        bsp.build_top_level(&scene.instances)?;
+        bsp.stats.build_seconds = t0.elapsed().as_secs_f64();
+        Ok(bsp)
+    }
+
+    fn set_instances(&mut self, instances: &[Instance]) -> Result<(), AccelError> {
+        self.build_top_level(instances)
+    }
+
+    fn name(&self) -> &'static str {
+        "bsp"
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.meshes
+            .iter()
+            .map(MeshTree::memory_bytes)
+            .sum::<usize>()
+            + self.top.memory_bytes()
+            + self.instances.len() * size_of::<InstanceData>()
+    }
+
+    fn stats(&self) -> BuildStats {
+        self.stats.clone()
+    }
+
+    fn intersect1(&self, ray: &Ray1) -> Option<Hit1> {
+        self.first1(ray, &mut ())
+    }
+
+    fn occluded1(&self, ray: &Ray1) -> bool {
+        if !ray.is_valid() {
+            return false;
+        }
+        let mut q = Any1 {
+            tmax: ray.tmax,
+            occluded: false,
+        };
+        crate::walk1::scene1(self, ray.origin, ray.dir, ray.tmin, &mut q, &mut ());
+        q.occluded
+    }
+
+    fn intersect_all1(&self, ray: &Ray1, f: &mut impl FnMut(Hit1)) {
+        if !ray.is_valid() {
+            return;
+        }
+        let mut q = All1 {
+            tmax: ray.tmax,
+            seen: Vec::new(),
+            f,
+        };
+        crate::walk1::scene1(self, ray.origin, ray.dir, ray.tmin, &mut q, &mut ());
+    }
+
+    #[inline(always)]
+    fn intersect<L: Lanes>(&self, l: L, rays: &Rays<L>, active: L::Mask) -> Hits<L> {
+        self.first(l, rays, active, &mut ())
+    }
+
+    #[inline(always)]
+    fn occluded<L: Lanes>(&self, l: L, rays: &Rays<L>, active: L::Mask) -> L::Mask {
+        let mut q = AnyP {
+            tmax: rays.tmax,
+            occluded: l.splat_mask(false),
+            neg_inf: l.splat(f32::NEG_INFINITY),
+        };
+        crate::walk::scene_packet(l, self, rays, active, &mut q, &mut ());
+        q.occluded & active
+    }
+
+    #[inline(always)]
+    fn intersect_all<L: Lanes>(
+        &self,
+        l: L,
+        rays: &Rays<L>,
+        active: L::Mask,
+        f: &mut impl FnMut(usize, Hit1),
+    ) {
+        let mut q = AllP {
+            tmax: rays.tmax,
+            seen: Vec::new(),
+            f,
+        };
+        crate::walk::scene_packet(l, self, rays, active, &mut q, &mut ());
+    }
+}

@@ -1,0 +1,410 @@
+//! The object-level build (paper section 3: object trees are "built carefully once"): a
+//! surface-area-heuristic kd-tree in O(N log N) with sorted split events, after Wald &
+//! Havran 2006, "On building fast kd-trees for ray tracing, and on doing that in O(N log N)".
+//!
+//! Each node keeps, per axis, its triangles' events (start, end or planar at a position)
+//! sorted by position; one sweep per axis finds the SAH-best plane. Children inherit the
+//! events of triangles on one side in order; triangles straddling the plane are clipped to
+//! each child (perfect splits), and only their new events are sorted and merged in.
+
+use coherent_accel::Aabb;
+use glam::Vec3;
+
+use crate::clip::clipped_bounds;
+use crate::{KdTree, MAX_INDEX, Node, SahParams, TreeStats};
+
+/// Event kinds, in their sort order at equal positions: ends before planars before starts.
+const END: u64 = 0;
+const PLANAR: u64 = 1;
+const START: u64 = 2;
+const TRI_BITS: u64 = (1 << 30) - 1;
+
+/// An event as one sortable `u64`: position (order-preserving bits), kind, triangle.
+#[inline]
+fn key(pos: f32, kind: u64, tri: u32) -> u64 {
+    (ordered(pos + 0.0) as u64) << 32 | kind << 30 | tri as u64
+}
+
+/// f32 bits mapped so that unsigned order is float order (`-0` is folded into `+0` above).
+#[inline]
+fn ordered(f: f32) -> u32 {
+    let b = f.to_bits();
+    if b >> 31 == 1 { !b } else { b | 0x8000_0000 }
+}
+
+#[inline]
+fn unordered(u: u32) -> f32 {
+    f32::from_bits(if u >> 31 == 1 { u & 0x7fff_ffff } else { !u })
+}
+
+#[inline]
+fn kind(e: u64) -> u64 {
+    e >> 30 & 3
+}
+
+#[inline]
+fn tri(e: u64) -> u32 {
+    (e & TRI_BITS) as u32
+}
+
+fn push_events(ev: &mut [Vec<u64>; 3], b: &Aabb, t: u32) {
+    for (k, list) in ev.iter_mut().enumerate() {
+        if b.min[k] == b.max[k] {
+            list.push(key(b.min[k], PLANAR, t));
+        } else {
+            list.push(key(b.min[k], START, t));
+            list.push(key(b.max[k], END, t));
+        }
+    }
+}
+
+/// Triangle sides after a split.
+const BOTH: u8 = 0;
+const LEFT: u8 = 1;
+const RIGHT: u8 = 2;
+
+struct Plane {
+    axis: usize,
+    pos: f32,
+    planar_left: bool,
+    cost: f32,
+}
+
+struct Builder<'a> {
+    tris: &'a [[Vec3; 3]],
+    boxes: Vec<Aabb>,
+    p: &'a SahParams,
+    depth_limit: u32,
+    side: Vec<u8>,
+    nodes: Vec<Node>,
+    items: Vec<u32>,
+    stats: TreeStats,
+    root_area: f64,
+}
+
+/// Builds the kd-tree of triangles `tris` (non-degenerate); leaf items are indices into it.
+/// At most 2^30 - 1 triangles (checked by mesh validation).
+pub fn build_sah(tris: &[[Vec3; 3]], p: &SahParams) -> KdTree {
+    let t0 = std::time::Instant::now();
+    let n = tris.len();
+    assert!(n <= MAX_INDEX, "{n} triangles: more than a tree can index");
+    if n == 0 {
+        return KdTree::empty();
+    }
+    let boxes: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(*t)).collect();
+    let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+    let mut ev: [Vec<u64>; 3] = core::array::from_fn(|_| Vec::with_capacity(2 * n));
+    for (i, b) in boxes.iter().enumerate() {
+        push_events(&mut ev, b, i as u32);
+    }
+    for list in &mut ev {
+        list.sort_unstable();
+    }
+    let mut b = Builder {
+        tris,
+        boxes,
+        p,
+        depth_limit: p.depth_limit(n),
+        side: vec![BOTH; n],
+        nodes: vec![Node::leaf(0, 0); 2],
+        items: Vec::new(),
+        stats: TreeStats::default(),
+        root_area: bounds.area().max(f32::MIN_POSITIVE) as f64,
+    };
+    b.build(0, bounds, ev, n, 0);
+    let mut stats = b.stats;
+    stats.build_seconds = t0.elapsed().as_secs_f64();
+    KdTree {
+        nodes: b.nodes,
+        items: b.items,
+        bounds,
+        stats,
+    }
+}
+
+impl Builder<'_> {
+    fn build(&mut self, node: usize, v: Aabb, ev: [Vec<u64>; 3], n: usize, depth: u32) {
+        let leaf_cost = self.p.intersection_cost * n as f32;
+        let plane = if n as u32 <= self.p.leaf_size || depth >= self.depth_limit {
+            None
+        } else {
+            self.find_plane(&v, &ev, n)
+        };
+        let Some(plane) = plane.filter(|pl| pl.cost < leaf_cost) else {
+            return self.leaf(node, &v, &ev[0], depth);
+        };
+        let area = v.area() as f64 / self.root_area;
+        self.stats.nodes += 1;
+        self.stats.sah_cost += area * self.p.traversal_cost as f64;
+
+        let (k, pos) = (plane.axis, plane.pos);
+        self.classify(&ev, &plane);
+        let mut vl = v;
+        vl.max[k] = pos;
+        let mut vr = v;
+        vr.min[k] = pos;
+
+        // Events of one-sided triangles keep their order; count the triangles on axis 0.
+        let mut left: [Vec<u64>; 3] = Default::default();
+        let mut right: [Vec<u64>; 3] = Default::default();
+        let mut both = Vec::new();
+        let (mut nl, mut nr) = (0, 0);
+        for j in 0..3 {
+            let (l, r) = (&mut left[j], &mut right[j]);
+            for &e in &ev[j] {
+                let t = tri(e) as usize;
+                let first = j == 0 && kind(e) != END;
+                match self.side[t] {
+                    LEFT => {
+                        l.push(e);
+                        nl += first as usize;
+                    }
+                    RIGHT => {
+                        r.push(e);
+                        nr += first as usize;
+                    }
+                    _ if first => both.push(t as u32),
+                    _ => {}
+                }
+            }
+        }
+        drop(ev);
+        // Straddling triangles: new events from their parts in each child, sorted, merged.
+        let mut new_l: [Vec<u64>; 3] = Default::default();
+        let mut new_r: [Vec<u64>; 3] = Default::default();
+        for &t in &both {
+            if let Some(b) = self.child_box(t, &vl) {
+                push_events(&mut new_l, &b, t);
+                nl += 1;
+            }
+            if let Some(b) = self.child_box(t, &vr) {
+                push_events(&mut new_r, &b, t);
+                nr += 1;
+            }
+        }
+        for j in 0..3 {
+            merge_into(&mut left[j], &mut new_l[j]);
+            merge_into(&mut right[j], &mut new_r[j]);
+        }
+        let children = self.nodes.len();
+        assert!(children < MAX_INDEX, "kd-tree too large");
+        self.nodes.push(Node::leaf(0, 0));
+        self.nodes.push(Node::leaf(0, 0));
+        self.nodes[node] = Node::inner(k, pos, children);
+        self.build(children, vl, left, nl, depth + 1);
+        self.build(children + 1, vr, right, nr, depth + 1);
+    }
+
+    fn leaf(&mut self, node: usize, v: &Aabb, ev0: &[u64], depth: u32) {
+        let first = self.items.len();
+        self.items
+            .extend(ev0.iter().filter(|&&e| kind(e) != END).map(|&e| tri(e)));
+        let count = self.items.len() - first;
+        assert!(first <= MAX_INDEX, "kd-tree leaf lists too large");
+        self.nodes[node] = Node::leaf(first, count);
+        let cost =
+            v.area() as f64 / self.root_area * (self.p.intersection_cost as f64 * count as f64);
+        KdTree::count_leaf(&mut self.stats, count, depth as usize, cost);
+    }
+
+    /// The part of triangle `t` in voxel `v` (perfect split), or its box cut by `v`.
+    fn child_box(&self, t: u32, v: &Aabb) -> Option<Aabb> {
+        if self.p.perfect_splits {
+            clipped_bounds(&self.tris[t as usize], v)
+        } else {
+            let b = self.boxes[t as usize].intersection(*v);
+            (!b.is_empty()).then_some(b)
+        }
+    }
+
+    /// The SAH-best plane: one sweep over each axis's sorted events.
+    fn find_plane(&self, v: &Aabb, ev: &[Vec<u64>; 3], n: usize) -> Option<Plane> {
+        let area = v.area();
+        // Also false for NaN.
+        let has_area = area > 0.0;
+        if !has_area {
+            return None;
+        }
+        let inv_area = 1.0 / area;
+        let (kt, ki) = (self.p.traversal_cost, self.p.intersection_cost);
+        let bonus = 1.0 - self.p.empty_bonus;
+        let sah = |pl: f32, pr: f32, nl: usize, nr: usize| {
+            let lambda = if nl == 0 || nr == 0 { bonus } else { 1.0 };
+            lambda * (kt + ki * (pl * nl as f32 + pr * nr as f32))
+        };
+        let ext = v.extent();
+        let mut best: Option<Plane> = None;
+        for k in 0..3 {
+            let (vmin, vmax) = (v.min[k], v.max[k]);
+            let has_extent = vmax > vmin;
+            if !has_extent {
+                continue;
+            }
+            let (a, b) = (ext[(k + 1) % 3], ext[(k + 2) % 3]);
+            let (ab, a_b) = (a * b, a + b);
+            let e = &ev[k];
+            let (mut nl, mut nr) = (0usize, n);
+            let mut i = 0;
+            while i < e.len() {
+                let pk = e[i] >> 32;
+                let count = |i: &mut usize, kd: u64| {
+                    let mut c = 0;
+                    while *i < e.len() && e[*i] >> 32 == pk && kind(e[*i]) == kd {
+                        c += 1;
+                        *i += 1;
+                    }
+                    c
+                };
+                let pe = count(&mut i, END);
+                let pp = count(&mut i, PLANAR);
+                let ps = count(&mut i, START);
+                nr -= pp + pe;
+                let pos = unordered(pk as u32);
+                if pos > vmin && pos < vmax {
+                    let pl = 2.0 * (ab + a_b * (pos - vmin)) * inv_area;
+                    let pr = 2.0 * (ab + a_b * (vmax - pos)) * inv_area;
+                    let cl = sah(pl, pr, nl + pp, nr);
+                    let cr = sah(pl, pr, nl, nr + pp);
+                    let (cost, planar_left) = if cl <= cr { (cl, true) } else { (cr, false) };
+                    if best.as_ref().is_none_or(|b| cost < b.cost) {
+                        best = Some(Plane {
+                            axis: k,
+                            pos,
+                            planar_left,
+                            cost,
+                        });
+                    }
+                }
+                nl += ps + pp;
+            }
+        }
+        best
+    }
+
+    /// Marks each triangle of the node LEFT, RIGHT or BOTH for `plane`.
+    fn classify(&mut self, ev: &[Vec<u64>; 3], plane: &Plane) {
+        for &e in &ev[0] {
+            if kind(e) != END {
+                self.side[tri(e) as usize] = BOTH;
+            }
+        }
+        let p = plane.pos;
+        for &e in &ev[plane.axis] {
+            let pos = unordered((e >> 32) as u32);
+            let t = tri(e) as usize;
+            match kind(e) {
+                END if pos <= p => self.side[t] = LEFT,
+                START if pos >= p => self.side[t] = RIGHT,
+                PLANAR => {
+                    self.side[t] = if pos < p || (pos == p && plane.planar_left) {
+                        LEFT
+                    } else {
+                        RIGHT
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+}
+
+/// Sorts `new` and merges it into the sorted `list`.
+fn merge_into(list: &mut Vec<u64>, new: &mut [u64]) {
+    if new.is_empty() {
+        return;
+    }
+    new.sort_unstable();
+    let old = core::mem::take(list);
+    let mut out = Vec::with_capacity(old.len() + new.len());
+    let (mut i, mut j) = (0, 0);
+    while i < old.len() && j < new.len() {
+        if old[i] <= new[j] {
+            out.push(old[i]);
+            i += 1;
+        } else {
+            out.push(new[j]);
+            j += 1;
+        }
+    }
+    out.extend_from_slice(&old[i..]);
+    out.extend_from_slice(&new[j..]);
+    *list = out;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn event_keys_sort_by_position_then_kind() {
+        let mut v = [
+            key(1.0, START, 3),
+            key(-2.0, END, 1),
+            key(1.0, END, 2),
+            key(-0.0, PLANAR, 9),
+            key(0.0, START, 4),
+            key(1.0, PLANAR, 5),
+        ];
+        v.sort_unstable();
+        let got: Vec<(f32, u64, u32)> = v
+            .iter()
+            .map(|&e| (unordered((e >> 32) as u32), kind(e), tri(e)))
+            .collect();
+        assert_eq!(
+            got,
+            vec![
+                (-2.0, END, 1),
+                (0.0, PLANAR, 9),
+                (0.0, START, 4),
+                (1.0, END, 2),
+                (1.0, PLANAR, 5),
+                (1.0, START, 3)
+            ]
+        );
+    }
+
+    /// Every triangle whose part in a leaf's voxel is non-empty is in that leaf.
+    #[test]
+    fn leaves_hold_every_triangle_that_reaches_them() {
+        let mut s = 7u64;
+        let mut rnd = || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let tris: Vec<[Vec3; 3]> = (0..400)
+            .map(|_| {
+                let c = Vec3::new(rnd(), rnd(), rnd()) * 10.0;
+                [0; 3].map(|_| c + Vec3::new(rnd(), rnd(), rnd()) - 0.5)
+            })
+            .collect();
+        for p in [SahParams::fast(), SahParams::default(), SahParams::slow()] {
+            let t = build_sah(&tris, &p);
+            assert!(t.stats.leaves > 10, "{:?}", t.stats);
+            // Walk the tree, keeping voxels.
+            let mut todo = vec![(0usize, t.bounds)];
+            while let Some((i, v)) = todo.pop() {
+                let n = t.nodes[i];
+                if n.is_leaf() {
+                    let items = &t.items[n.items()];
+                    for (j, tri) in tris.iter().enumerate() {
+                        if clipped_bounds(tri, &v).is_some_and(|b| {
+                            // Strictly inside in every axis where the voxel has extent.
+                            (0..3).all(|k| b.max[k] > b.min[k] || v.max[k] == v.min[k])
+                        }) {
+                            assert!(items.contains(&(j as u32)), "triangle {j} missing");
+                        }
+                    }
+                } else {
+                    let (k, s) = (n.axis(), n.split());
+                    let (mut l, mut r) = (v, v);
+                    l.max[k] = s;
+                    r.min[k] = s;
+                    todo.push((n.left(), l));
+                    todo.push((n.left() + 1, r));
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,92 @@
+//! Traversal counters (paper section 3's intersection cache hit rate, nodes, tests, the
+//! packet-to-single-ray switch), compiled out of the normal queries.
+
+/// Where the traversal reports what it did. `()` counts nothing and costs nothing.
+pub trait Counters {
+    #[inline(always)]
+    fn inner(&mut self) {}
+    #[inline(always)]
+    fn leaf(&mut self) {}
+    /// A triangle test for `lanes` lanes.
+    #[inline(always)]
+    fn tri_test(&mut self, _lanes: u32) {}
+    /// A triangle test skipped by the mailbox, for `lanes` lanes.
+    #[inline(always)]
+    fn mailbox_skip(&mut self, _lanes: u32) {}
+    /// An instance entered by `lanes` lanes.
+    #[inline(always)]
+    fn instance(&mut self, _lanes: u32) {}
+    /// A subtree handed from packet to single-ray traversal, for `lanes` lanes.
+    #[inline(always)]
+    fn handoff(&mut self, _lanes: u32) {}
+}
+
+impl Counters for () {}
+
+/// What a batch of queries did, summed (see [`crate::Bsp::intersect_counted`]). Packet
+/// operations count once per packet in the plain fields and once per lane in `*_lanes`.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct TraversalStats {
+    pub inner_nodes: u64,
+    pub leaves: u64,
+    pub tri_tests: u64,
+    pub tri_test_lanes: u64,
+    pub mailbox_skips: u64,
+    pub mailbox_skip_lanes: u64,
+    pub instances: u64,
+    pub instance_lanes: u64,
+    pub handoffs: u64,
+    pub handoff_lanes: u64,
+}
+
+impl TraversalStats {
+    /// Share of triangle tests (per lane) the mailbox avoided.
+    pub fn mailbox_hit_rate(&self) -> f64 {
+        let all = self.tri_test_lanes + self.mailbox_skip_lanes;
+        if all == 0 {
+            0.0
+        } else {
+            self.mailbox_skip_lanes as f64 / all as f64
+        }
+    }
+
+    /// Mean active lanes per packet triangle test.
+    pub fn lanes_per_test(&self) -> f64 {
+        if self.tri_tests == 0 {
+            0.0
+        } else {
+            self.tri_test_lanes as f64 / self.tri_tests as f64
+        }
+    }
+}
+
+impl Counters for TraversalStats {
+    #[inline(always)]
+    fn inner(&mut self) {
+        self.inner_nodes += 1;
+    }
+    #[inline(always)]
+    fn leaf(&mut self) {
+        self.leaves += 1;
+    }
+    #[inline(always)]
+    fn tri_test(&mut self, lanes: u32) {
+        self.tri_tests += 1;
+        self.tri_test_lanes += lanes as u64;
+    }
+    #[inline(always)]
+    fn mailbox_skip(&mut self, lanes: u32) {
+        self.mailbox_skips += 1;
+        self.mailbox_skip_lanes += lanes as u64;
+    }
+    #[inline(always)]
+    fn instance(&mut self, lanes: u32) {
+        self.instances += 1;
+        self.instance_lanes += lanes as u64;
+    }
+    #[inline(always)]
+    fn handoff(&mut self, lanes: u32) {
+        self.handoffs += 1;
+        self.handoff_lanes += lanes as u64;
+    }
+}

@@ -1,0 +1,164 @@
+//! Build and traversal parameters of the two-level BSP, with presets (paper section 3: object
+//! trees "built carefully once", the top tree "built fast").
+
+/// Surface-area-heuristic parameters of the object (per-mesh) kd-trees, after Havran's thesis
+/// and Wald & Havran 2006.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SahParams {
+    /// Cost of visiting an inner node (K_T).
+    pub traversal_cost: f32,
+    /// Cost of one ray-triangle test (K_I).
+    pub intersection_cost: f32,
+    /// Cost reduction for a split that cuts off empty space (lambda = 1 - bonus when one side
+    /// holds nothing), in `[0, 1)`.
+    pub empty_bonus: f32,
+    /// Deepest leaf; 0 picks `8 + 1.3 log2(N)` (Havran), at most [`MAX_TREE_DEPTH`].
+    pub max_depth: u32,
+    /// Nodes with at most this many triangles become leaves without a split search.
+    pub leaf_size: u32,
+    /// Clip triangles straddling a split to each child ("perfect splits", Wald & Havran);
+    /// without it a straddling triangle keeps its bounding box cut by the child's box.
+    pub perfect_splits: bool,
+}
+
+/// The deepest any tree may be (the traversal stacks hold this many entries).
+pub const MAX_TREE_DEPTH: u32 = 60;
+
+impl Default for SahParams {
+    fn default() -> Self {
+        Self::default_preset()
+    }
+}
+
+impl SahParams {
+    /// Quick to build: no clipping, larger leaves.
+    pub fn fast() -> Self {
+        Self {
+            traversal_cost: 15.0,
+            intersection_cost: 20.0,
+            empty_bonus: 0.2,
+            max_depth: 0,
+            leaf_size: 4,
+            perfect_splits: false,
+        }
+    }
+
+    /// The recommended trade-off (Wald & Havran's costs with perfect splits).
+    pub fn default_preset() -> Self {
+        Self {
+            traversal_cost: 15.0,
+            intersection_cost: 20.0,
+            empty_bonus: 0.2,
+            max_depth: 0,
+            leaf_size: 1,
+            perfect_splits: true,
+        }
+    }
+
+    /// Slower to build, for the fastest traversal: deeper trees.
+    pub fn slow() -> Self {
+        Self {
+            max_depth: MAX_TREE_DEPTH,
+            ..Self::default_preset()
+        }
+    }
+
+    /// A preset by name: `fast`, `default`, `slow`.
+    pub fn preset(name: &str) -> Option<Self> {
+        match name {
+            "fast" => Some(Self::fast()),
+            "default" => Some(Self::default_preset()),
+            "slow" => Some(Self::slow()),
+            _ => None,
+        }
+    }
+
+    /// The depth limit for `n` triangles.
+    pub fn depth_limit(&self, n: usize) -> u32 {
+        let auto = || (8.0 + 1.3 * (n.max(1) as f64).log2()).round() as u32;
+        let d = if self.max_depth == 0 {
+            auto()
+        } else {
+            self.max_depth
+        };
+        d.min(MAX_TREE_DEPTH)
+    }
+}
+
+/// Parameters of the top-level tree over instance boxes: a binned SAH, rebuilt whenever
+/// instances move.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TopParams {
+    /// Candidate planes per axis: `bins - 1` bin boundaries.
+    pub bins: u32,
+    pub traversal_cost: f32,
+    /// Cost of entering an instance (transforming the rays, walking its tree).
+    pub intersection_cost: f32,
+    pub empty_bonus: f32,
+    /// 0 picks `8 + 1.3 log2(N)`.
+    pub max_depth: u32,
+}
+
+impl Default for TopParams {
+    fn default() -> Self {
+        Self {
+            bins: 16,
+            traversal_cost: 15.0,
+            intersection_cost: 60.0,
+            empty_bonus: 0.2,
+            max_depth: 0,
+        }
+    }
+}
+
+/// Everything the BSP takes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BspParams {
+    pub object: SahParams,
+    pub top: TopParams,
+    /// Per-ray intersection cache (mailbox): a triangle met again in a later leaf is not
+    /// retested.
+    pub mailbox: bool,
+    /// Packet traversal hands a subtree to single-ray traversal when its active lanes are
+    /// at most this many; `None` takes [`default_single_ray_threshold`] for the width.
+    pub single_ray_threshold: Option<u32>,
+}
+
+impl Default for BspParams {
+    fn default() -> Self {
+        Self {
+            object: SahParams::default(),
+            top: TopParams::default(),
+            mailbox: true,
+            single_ray_threshold: None,
+        }
+    }
+}
+
+impl BspParams {
+    /// The object-tree preset `name` (`fast`, `default`, `slow`) with default everything else.
+    pub fn preset(name: &str) -> Option<Self> {
+        Some(Self {
+            object: SahParams::preset(name)?,
+            ..Self::default()
+        })
+    }
+
+    /// The switch threshold in effect for packets of `lanes` lanes.
+    pub fn threshold_for(&self, lanes: usize) -> u32 {
+        self.single_ray_threshold
+            .unwrap_or_else(|| default_single_ray_threshold(lanes))
+    }
+}
+
+/// The measured best active-lane count at or below which a packet's subtree is traversed ray
+/// by ray, per packet width. Filled in from the `accel` experiment's threshold sweep (see
+/// the crate README / results).
+pub fn default_single_ray_threshold(lanes: usize) -> u32 {
+    match lanes {
+        0..=1 => 0,
+        2..=4 => 1,
+        5..=8 => 1,
+        _ => 2,
+    }
+}

@@ -1,0 +1,372 @@
+//! Packet traversal of the two-level BSP, as in paper section 3 (after Wald et al. 2001):
+//! the packet is tested against the scene box, split into groups of equal direction signs,
+//! and walked near/far with an explicit stack; masks block lanes that do not enter a child or
+//! have finished; a node is skipped when every active lane's hit is nearer than it. When a
+//! subtree's active lanes fall to a threshold, its lanes continue ray by ray.
+
+use coherent_accel::{Aabb, Rays, Vec3s};
+use coherent_simd::{Lanes, SimdF32, SimdI32, SimdMask};
+
+use crate::KdTree;
+use crate::bsp::{Bsp, MeshTree};
+use crate::counters::Counters;
+use crate::mailbox::MailboxP;
+use crate::query::QueryP;
+use crate::stack::Stack;
+use crate::walk1::{MeshTask, Ray1x};
+
+/// A subtree still to visit: node, per-lane segment, lanes.
+#[derive(Clone, Copy)]
+struct Entry<L: Lanes> {
+    node: u32,
+    tn: L::F32s,
+    tf: L::F32s,
+    m: L::Mask,
+}
+
+/// Rays of one sign group prepared for traversal.
+pub(crate) struct RaysX<'a, L: Lanes> {
+    pub o: &'a Vec3s<L>,
+    pub d: &'a Vec3s<L>,
+    pub inv: &'a Vec3s<L>,
+    pub tmin: L::F32s,
+    /// Bit `k` set when the group's direction is negative along axis `k`.
+    pub signs: u32,
+}
+
+/// `1 / d` per lane and axis.
+#[inline(always)]
+pub(crate) fn inverse<L: Lanes>(l: L, d: &Vec3s<L>) -> Vec3s<L> {
+    let one = l.splat(1.0);
+    Vec3s::new(one / d.x, one / d.y, one / d.z)
+}
+
+/// The ray segments inside box `b`, cut to `[t0, t1]`, with the arithmetic of
+/// [`Aabb::clip1`] per lane (a lane misses when the result has `t0 > t1`).
+#[inline(always)]
+pub(crate) fn clip_box<L: Lanes>(
+    l: L,
+    b: &Aabb,
+    o: &Vec3s<L>,
+    inv: &Vec3s<L>,
+    mut t0: L::F32s,
+    mut t1: L::F32s,
+) -> (L::F32s, L::F32s) {
+    let (ninf, inf) = (l.splat(f32::NEG_INFINITY), l.splat(f32::INFINITY));
+    for k in 0..3 {
+        let a = (l.splat(b.min[k]) - o.axis(k)) * inv.axis(k);
+        let c = (l.splat(b.max[k]) - o.axis(k)) * inv.axis(k);
+        // NaN: a ray in a face plane with a zero direction component; the slab does not
+        // limit it.
+        let nan = a.is_nan() | c.is_nan();
+        let lo = nan.select(ninf, a.min(c));
+        let hi = nan.select(inf, a.max(c));
+        t0 = lo.max(t0);
+        t1 = hi.min(t1);
+    }
+    (t0, t1)
+}
+
+/// Bitmasks of the lanes whose direction is negative along x, y, z.
+#[inline(always)]
+pub(crate) fn sign_bits<L: Lanes>(l: L, d: &Vec3s<L>) -> [u32; 3] {
+    let zero = l.splat_i32(0);
+    [d.x, d.y, d.z].map(|c| c.to_bits().lt(zero).bitmask())
+}
+
+/// Calls `f(group, signs)` for each group of the lanes `m` with equal direction signs.
+#[inline(always)]
+pub(crate) fn sign_groups<L: Lanes>(
+    l: L,
+    m: L::Mask,
+    neg: [u32; 3],
+    mut f: impl FnMut(L::Mask, u32),
+) {
+    let all = m.bitmask();
+    let mut rest = all;
+    while rest != 0 {
+        let i = rest.trailing_zeros();
+        let mut group = rest;
+        let mut signs = 0;
+        for (k, n) in neg.iter().enumerate() {
+            let bit = n >> i & 1;
+            signs |= bit << k;
+            // Lanes whose sign bit along k equals lane i's.
+            group &= !(n ^ 0u32.wrapping_sub(bit));
+        }
+        rest &= !group;
+        let gm = if group == all {
+            m
+        } else {
+            m & l.mask_from_bits(group)
+        };
+        f(gm, signs);
+    }
+}
+
+/// Walks `tree` from `start` with lanes `m` over per-lane segments `[tn, tf]`, front to
+/// back, calling `leaf(s, c, items, lanes)` at each leaf. Entries are skipped for lanes whose
+/// `limit(s)` is before them. A subtree whose active lanes are at most `thr` goes to
+/// `single(s, c, node, lanes, tn, tf)` instead (`thr = 0` never switches).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn walk<L: Lanes, S, C: Counters>(
+    l: L,
+    tree: &KdTree,
+    r: &RaysX<'_, L>,
+    start: usize,
+    mut tn: L::F32s,
+    mut tf: L::F32s,
+    mut m: L::Mask,
+    thr: u32,
+    s: &mut S,
+    c: &mut C,
+    limit: impl Fn(&S) -> L::F32s,
+    mut leaf: impl FnMut(&mut S, &mut C, &[u32], L::Mask),
+    mut single: impl FnMut(&mut S, &mut C, usize, L::Mask, L::F32s, L::F32s),
+) {
+    let nodes = &tree.nodes[..];
+    let mut stack: Stack<Entry<L>> = Stack::new();
+    let mut node = start;
+    loop {
+        if m.count() <= thr {
+            c.handoff(m.count());
+            single(s, c, node, m, tn, tf);
+        } else {
+            loop {
+                let n = nodes[node];
+                if n.is_leaf() {
+                    c.leaf();
+                    leaf(s, c, &tree.items[n.items()], m);
+                    break;
+                }
+                c.inner();
+                let k = n.axis();
+                let ts = (l.splat(n.split()) - r.o.axis(k)) * r.inv.axis(k);
+                let neg = (r.signs >> k & 1) as usize;
+                let near = n.left() + neg;
+                let far = n.left() + 1 - neg;
+                // Lanes that reach the near child (not `ts < tn`) and the far child (not
+                // `ts > tf`); NaN lanes reach both.
+                let go_near = m.and_not(ts.lt(tn));
+                let go_far = m.and_not(ts.gt(tf));
+                if go_far.none() {
+                    node = near;
+                } else if go_near.none() {
+                    node = far;
+                } else {
+                    stack.push(Entry {
+                        node: far as u32,
+                        tn: ts.max(tn),
+                        tf,
+                        m: go_far,
+                    });
+                    node = near;
+                    tf = ts.min(tf);
+                    m = go_near;
+                    if m.count() <= thr {
+                        c.handoff(m.count());
+                        single(s, c, node, m, tn, tf);
+                        break;
+                    }
+                }
+            }
+        }
+        // The next subtree some lane still needs.
+        loop {
+            let Some(e) = stack.pop() else {
+                return;
+            };
+            let live = e.m & e.tn.le(limit(s));
+            if live.any() {
+                (node, tn, tf, m) = (e.node as usize, e.tn, e.tf, live);
+                break;
+            }
+        }
+    }
+}
+
+/// Walks one mesh with an object-space packet group (lanes `m`, segments `[tn, tf]`).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn mesh_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
+    l: L,
+    mesh: &MeshTree,
+    inst: u32,
+    r: &RaysX<'_, L>,
+    tn: L::F32s,
+    tf: L::F32s,
+    m: L::Mask,
+    thr: u32,
+    mailbox: bool,
+    q: &mut Q,
+    c: &mut C,
+) {
+    let mut mb = MailboxP::new();
+    let tris = &mesh.tris[..];
+    walk(
+        l,
+        &mesh.tree,
+        r,
+        0,
+        tn,
+        tf,
+        m,
+        thr,
+        q,
+        c,
+        |q| q.limit(),
+        |q, c, items, m| {
+            let bits = m.bitmask();
+            for &i in items {
+                let mut mm = m;
+                if mailbox {
+                    let new = mb.untested(i, bits);
+                    if new != bits {
+                        c.mailbox_skip((bits & !new).count_ones());
+                        if new == 0 {
+                            continue;
+                        }
+                        mm = m & l.mask_from_bits(new);
+                    }
+                }
+                c.tri_test(mm.count());
+                let tri = &tris[i as usize];
+                let (hit, t, u, v) = tri.intersect(l, r.o, r.d, r.tmin, q.limit(), mm);
+                if hit.any() {
+                    q.hits(l, hit, t, u, v, tri.prim, inst);
+                    if q.finished(m) {
+                        return;
+                    }
+                }
+            }
+        },
+        |q, c, node, m, tn, tf| {
+            let mut bits = m.bitmask();
+            while bits != 0 {
+                let i = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                let mut task = MeshTask {
+                    mesh,
+                    r: Ray1x::new(r.o.lane(i), r.d.lane(i), r.tmin.lane(i)),
+                    inst,
+                    start: (node, tn.lane(i), tf.lane(i)),
+                    mailbox,
+                    c,
+                };
+                q.with_lane(l, i, &mut task);
+            }
+        },
+    );
+}
+
+/// Enters instance `i` with world-space lanes `m`: moves them into object space, clips them
+/// to the mesh box and walks the mesh, per sign group when the transform changed signs.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn enter_instance<L: Lanes, Q: QueryP<L>, C: Counters>(
+    l: L,
+    bsp: &Bsp,
+    i: u32,
+    world: &Rays<L>,
+    wr: &RaysX<'_, L>,
+    m: L::Mask,
+    thr: u32,
+    q: &mut Q,
+    c: &mut C,
+) {
+    let inst = &bsp.instances[i as usize];
+    let mesh = &bsp.meshes[inst.mesh as usize];
+    if inst.identity {
+        let (t0, t1) = clip_box(l, &mesh.tree.bounds, wr.o, wr.inv, wr.tmin, q.limit());
+        let mm = m & t0.le(t1);
+        if mm.any() {
+            c.instance(mm.count());
+            mesh_packet(l, mesh, i, wr, t0, t1, mm, thr, bsp.params.mailbox, q, c);
+        }
+        return;
+    }
+    let obj = world.transformed(l, &inst.object_from_world);
+    let inv = inverse(l, &obj.dir);
+    let (t0, t1) = clip_box(l, &mesh.tree.bounds, &obj.origin, &inv, wr.tmin, q.limit());
+    let mm = m & t0.le(t1);
+    if mm.none() {
+        return;
+    }
+    c.instance(mm.count());
+    let neg = sign_bits(l, &obj.dir);
+    sign_groups(l, mm, neg, |g, signs| {
+        let r = RaysX {
+            o: &obj.origin,
+            d: &obj.dir,
+            inv: &inv,
+            tmin: wr.tmin,
+            signs,
+        };
+        mesh_packet(l, mesh, i, &r, t0, t1, g, thr, bsp.params.mailbox, q, c);
+    });
+}
+
+/// A packet through the whole scene: lanes `active` of `rays` (invalid lanes dropped).
+#[inline(always)]
+pub(crate) fn scene_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
+    l: L,
+    bsp: &Bsp,
+    rays: &Rays<L>,
+    active: L::Mask,
+    q: &mut Q,
+    c: &mut C,
+) {
+    let m = active & rays.valid(l);
+    if m.none() {
+        return;
+    }
+    let inv = inverse(l, &rays.dir);
+    // The scene box first: lanes that miss it are done.
+    let (t0, t1) = clip_box(l, &bsp.top.bounds, &rays.origin, &inv, rays.tmin, q.limit());
+    let m = m & t0.le(t1);
+    if m.none() {
+        return;
+    }
+    let thr = bsp.params.threshold_for(L::N);
+    let neg = sign_bits(l, &rays.dir);
+    sign_groups(l, m, neg, |g, signs| {
+        let wr = RaysX {
+            o: &rays.origin,
+            d: &rays.dir,
+            inv: &inv,
+            tmin: rays.tmin,
+            signs,
+        };
+        let mut seen = MailboxP::new();
+        walk(
+            l,
+            &bsp.top,
+            &wr,
+            0,
+            t0,
+            t1,
+            g,
+            0,
+            q,
+            c,
+            |q| q.limit(),
+            |q, c, items, m| {
+                let bits = m.bitmask();
+                for &i in items {
+                    let new = seen.untested(i, bits);
+                    if new == 0 {
+                        continue;
+                    }
+                    let mm = if new == bits {
+                        m
+                    } else {
+                        m & l.mask_from_bits(new)
+                    };
+                    enter_instance(l, bsp, i, rays, &wr, mm, thr, q, c);
+                }
+            },
+            |_, _, _, _, _, _| {},
+        );
+    });
+}

@@ -1,0 +1,239 @@
+//! Single-ray traversal of the two-level BSP (paper section 3; the scalar path, and the path
+//! packets switch to when few lanes stay active): near/far order with an explicit stack,
+//! the intersection cache, early exit once the nearest hit is before the next node.
+
+use coherent_accel::{Hit1, transform_point1, transform_vector1};
+use glam::Vec3;
+
+use crate::KdTree;
+use crate::bsp::{Bsp, MeshTree};
+use crate::counters::Counters;
+use crate::mailbox::Mailbox1;
+use crate::query::{LaneTask, Query1};
+use crate::stack::Stack;
+
+/// A ray prepared for traversal.
+#[derive(Clone, Copy)]
+pub(crate) struct Ray1x {
+    pub o: Vec3,
+    pub d: Vec3,
+    /// `1 / d` per axis (infinite for zero components).
+    pub inv: Vec3,
+    pub tmin: f32,
+    /// Per axis 1 when the direction's sign bit is set: the right child is nearer.
+    pub neg: [usize; 3],
+}
+
+impl Ray1x {
+    #[inline(always)]
+    pub fn new(o: Vec3, d: Vec3, tmin: f32) -> Self {
+        Self {
+            o,
+            d,
+            inv: Vec3::new(1.0 / d.x, 1.0 / d.y, 1.0 / d.z),
+            tmin,
+            neg: [0, 1, 2].map(|k| d[k].is_sign_negative() as usize),
+        }
+    }
+}
+
+/// `max` with the x86 rule: a NaN `a` gives `b`.
+#[inline(always)]
+pub(crate) fn max1(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+/// `min` with the x86 rule: a NaN `a` gives `b`.
+#[inline(always)]
+pub(crate) fn min1(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
+/// Walks `tree` from node `start` over the ray segment `[tn, tf]`, calling `leaf` on each
+/// leaf's items in front-to-back order until it returns true (returns true then). Nodes
+/// entirely beyond `limit(s)` are skipped.
+///
+/// At a split with `ts = (split - o) / d`: the near child alone when `ts > tf`, the far one
+/// alone when `ts < tn`, else both. A NaN `ts` (a ray lying in the split plane) visits both
+/// with the whole segment.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn walk1<S, C: Counters>(
+    tree: &KdTree,
+    r: &Ray1x,
+    start: usize,
+    mut tn: f32,
+    mut tf: f32,
+    s: &mut S,
+    c: &mut C,
+    limit: impl Fn(&S) -> f32,
+    mut leaf: impl FnMut(&mut S, &mut C, &[u32]) -> bool,
+) -> bool {
+    let nodes = &tree.nodes[..];
+    let mut stack: Stack<(u32, f32, f32)> = Stack::new();
+    let mut node = start;
+    loop {
+        let n = nodes[node];
+        if !n.is_leaf() {
+            c.inner();
+            let k = n.axis();
+            let ts = (n.split() - r.o[k]) * r.inv[k];
+            let near = n.left() + r.neg[k];
+            let far = n.left() + 1 - r.neg[k];
+            if ts > tf {
+                node = near;
+            } else if ts < tn {
+                node = far;
+            } else {
+                stack.push((far as u32, max1(ts, tn), tf));
+                node = near;
+                tf = min1(ts, tf);
+            }
+            continue;
+        }
+        c.leaf();
+        if leaf(s, c, &tree.items[n.items()]) {
+            return true;
+        }
+        loop {
+            let Some((next, a, b)) = stack.pop() else {
+                return false;
+            };
+            if a <= limit(s) {
+                (node, tn, tf) = (next as usize, a, b);
+                break;
+            }
+        }
+    }
+}
+
+/// Traverses one mesh's tree with an object-space ray, from node `start` over `[tn, tf]`
+/// (or, with `None`, from the root over the ray's part inside the mesh box). Returns true when
+/// the query finished.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn mesh1<Q: Query1, C: Counters>(
+    mesh: &MeshTree,
+    r: &Ray1x,
+    inst: u32,
+    start: Option<(usize, f32, f32)>,
+    mailbox: bool,
+    q: &mut Q,
+    c: &mut C,
+) -> bool {
+    let (node, tn, tf) = match start {
+        Some(s) => s,
+        None => match mesh.tree.bounds.clip1(r.o, r.inv, r.tmin, q.limit()) {
+            Some((t0, t1)) => (0, t0, t1),
+            None => return false,
+        },
+    };
+    let mut mb = Mailbox1::new();
+    let tris = &mesh.tris[..];
+    walk1(
+        &mesh.tree,
+        r,
+        node,
+        tn,
+        tf,
+        q,
+        c,
+        |q| q.limit(),
+        |q, c, items| {
+            for &i in items {
+                if mailbox && mb.seen(i) {
+                    c.mailbox_skip(1);
+                    continue;
+                }
+                c.tri_test(1);
+                let tri = &tris[i as usize];
+                if let Some((t, u, v)) = tri.intersect1(r.o, r.d, r.tmin, q.limit()) {
+                    let h = Hit1 {
+                        t,
+                        u,
+                        v,
+                        prim: tri.prim,
+                        inst,
+                    };
+                    if q.hit(h) {
+                        return true;
+                    }
+                }
+            }
+            false
+        },
+    )
+}
+
+/// A world-space ray through the whole scene (the ray must be valid).
+#[inline(always)]
+pub(crate) fn scene1<Q: Query1, C: Counters>(
+    bsp: &Bsp,
+    o: Vec3,
+    d: Vec3,
+    tmin: f32,
+    q: &mut Q,
+    c: &mut C,
+) {
+    let r = Ray1x::new(o, d, tmin);
+    let Some((t0, t1)) = bsp.top.bounds.clip1(r.o, r.inv, tmin, q.limit()) else {
+        return;
+    };
+    let mut seen = Mailbox1::new();
+    walk1(
+        &bsp.top,
+        &r,
+        0,
+        t0,
+        t1,
+        q,
+        c,
+        |q| q.limit(),
+        |q, c, items| {
+            for &i in items {
+                if seen.seen(i) {
+                    continue;
+                }
+                let inst = &bsp.instances[i as usize];
+                let mesh = &bsp.meshes[inst.mesh as usize];
+                c.instance(1);
+                let done = if inst.identity {
+                    mesh1(mesh, &r, i, None, bsp.params.mailbox, q, c)
+                } else {
+                    let m = &inst.object_from_world;
+                    let ro = Ray1x::new(transform_point1(m, o), transform_vector1(m, d), tmin);
+                    mesh1(mesh, &ro, i, None, bsp.params.mailbox, q, c)
+                };
+                if done {
+                    return true;
+                }
+            }
+            false
+        },
+    );
+}
+
+/// One lane of a packet continuing ray by ray in a mesh subtree.
+pub(crate) struct MeshTask<'a, C: Counters> {
+    pub mesh: &'a MeshTree,
+    pub r: Ray1x,
+    pub inst: u32,
+    pub start: (usize, f32, f32),
+    pub mailbox: bool,
+    pub c: &'a mut C,
+}
+
+impl<C: Counters> LaneTask for MeshTask<'_, C> {
+    #[inline(always)]
+    fn run<Q: Query1>(&mut self, q: &mut Q) {
+        mesh1(
+            self.mesh,
+            &self.r,
+            self.inst,
+            Some(self.start),
+            self.mailbox,
+            q,
+            self.c,
+        );
+    }
+}

@@ -1,0 +1,278 @@
+//! The two-level BSP against brute force (paper section 3): first hit, all hits and
+//! occlusion, single rays and packets of every lane backend, on random soups, random
+//! instance transforms and random rays, plus the edge cases.
+
+mod common;
+
+use coherent_accel::shapes::{Rng, icosphere, soup};
+use coherent_accel::{Accel, Mesh, Ray1, Rays, Scene};
+use coherent_bsp::{Bsp, BspParams, SahParams};
+use coherent_simd::Lanes;
+use common::*;
+use glam::Vec3;
+use proptest::prelude::*;
+
+/// Every preset and traversal switch the tests run under.
+fn param_sets(lanes: usize) -> Vec<BspParams> {
+    let mut v = vec![];
+    for (preset, mailbox, thr) in [
+        ("default", true, None),
+        ("fast", false, Some(0)),
+        ("slow", true, Some(lanes.div_ceil(2) as u32)),
+    ] {
+        let mut p = BspParams::preset(preset).unwrap();
+        p.mailbox = mailbox;
+        p.single_ray_threshold = thr;
+        v.push(p);
+    }
+    v
+}
+
+/// The edge cases, run for one lane backend.
+pub fn edge_cases<L: Lanes>(l: L) {
+    let check = |scene: &Scene, rays: &[Ray1]| {
+        for p in param_sets(L::N) {
+            let (bf, bsp) = build_both(scene, &p);
+            check_all_queries(l, &bf, &bsp, rays, 1).unwrap();
+        }
+    };
+
+    // Empty scene, a scene whose only mesh is all degenerate.
+    let rays = random_rays(1, &Scene::default(), 16);
+    check(&Scene::default(), &rays);
+    let flat = Mesh::new(
+        "flat",
+        vec![Vec3::ZERO, Vec3::X, 2.0 * Vec3::X],
+        vec![[0, 1, 2]],
+    );
+    check(&one(flat), &rays);
+
+    // One triangle: axis-parallel rays through its vertices, edges and inside, and along it.
+    let tri = one(Mesh::new(
+        "one",
+        vec![
+            Vec3::ZERO,
+            Vec3::new(4.0, 0.0, 0.0),
+            Vec3::new(0.0, 4.0, 0.0),
+        ],
+        vec![[0, 1, 2]],
+    ));
+    let mut rays = vec![];
+    for p in [
+        Vec3::ZERO,
+        Vec3::new(2.0, 0.0, 0.0),
+        Vec3::new(2.0, 2.0, 0.0),
+        Vec3::ONE,
+    ] {
+        rays.push(Ray1::infinite(p + Vec3::Z, -Vec3::Z));
+        rays.push(Ray1::infinite(p - Vec3::Z, Vec3::Z));
+        rays.push(Ray1::infinite(p - Vec3::X, Vec3::X));
+        // Starting on the surface.
+        rays.push(Ray1::infinite(p, Vec3::new(0.3, 0.2, 1.0)));
+        rays.push(Ray1::infinite(p, Vec3::new(0.3, 0.2, -1.0)));
+    }
+    check(&tri, &rays);
+
+    // Bad rays: zero, NaN and infinite directions, NaN origins and bounds: misses.
+    let scene = random_scene(3, 200, 1, 2);
+    let o = Vec3::new(0.5, 0.5, -20.0);
+    let bad = [
+        Ray1::infinite(o, Vec3::ZERO),
+        Ray1::infinite(o, Vec3::new(f32::NAN, 0.0, 1.0)),
+        Ray1::infinite(o, Vec3::new(0.0, f32::INFINITY, 1.0)),
+        Ray1::infinite(Vec3::NAN, Vec3::Z),
+        Ray1::infinite(Vec3::new(f32::NEG_INFINITY, 0.0, 0.0), Vec3::X),
+        Ray1::new(o, Vec3::Z, f32::NAN, 1.0),
+        Ray1::new(o, Vec3::Z, 0.0, f32::NAN),
+        Ray1::new(o, Vec3::Z, 5.0, 1.0),
+        Ray1::infinite(o, Vec3::splat(1e-30)),
+    ];
+    for p in param_sets(L::N) {
+        let (bf, bsp) = build_both(&scene, &p);
+        for r in &bad {
+            assert!(bsp.intersect1(r).is_none() && !bsp.occluded1(r));
+            let mut n = 0;
+            bsp.intersect_all1(r, &mut |_| n += 1);
+            assert_eq!(n, 0);
+        }
+        check_all_queries(l, &bf, &bsp, &bad, 2).unwrap();
+        // Bad lanes beside good ones.
+        let good = random_rays(4, &scene, 64);
+        let mixed: Vec<Ray1> = good
+            .iter()
+            .zip(bad.iter().cycle())
+            .flat_map(|(g, b)| [*b, *g])
+            .collect();
+        check_all_queries(l, &bf, &bsp, &mixed, 3).unwrap();
+    }
+
+    // Rays lying in split planes of the tree (axis-parallel, origin on the plane), and
+    // crossing splits exactly at vertices.
+    let scene = one(soup("grid", 300, 4.0, 1.5, 9));
+    let bsp = Bsp::build(&scene, &BspParams::default()).unwrap();
+    let tree = &bsp.mesh_trees()[0].tree;
+    let mut rng = Rng::new(5);
+    let mut rays = vec![];
+    for n in tree.nodes.iter().filter(|n| !n.is_leaf()).take(60) {
+        let k = n.axis();
+        let mut o = rng.vec3(Vec3::splat(-6.0), Vec3::splat(6.0));
+        o[k] = n.split();
+        let mut d = rng.unit_vector();
+        d[k] = 0.0;
+        rays.push(Ray1::infinite(o, d));
+        rays.push(Ray1::infinite(o, -d));
+        let mut e = Vec3::ZERO;
+        e[(k + 1) % 3] = 1.0;
+        rays.push(Ray1::infinite(o - 8.0 * e, e));
+    }
+    for v in scene.meshes[0].positions.iter().take(100) {
+        let o = rng.vec3(Vec3::splat(-9.0), Vec3::splat(9.0));
+        rays.push(Ray1::infinite(o, *v - o));
+    }
+    check(&scene, &rays);
+
+    // Coplanar axis-aligned geometry (many planar events at one position).
+    let mut tris = vec![];
+    for i in 0..10 {
+        for j in 0..10 {
+            let (x, y) = (i as f32, j as f32);
+            tris.push([
+                Vec3::new(x, y, 0.0),
+                Vec3::new(x + 1.0, y, 0.0),
+                Vec3::new(x, y + 1.0, 0.0),
+            ]);
+            tris.push([
+                Vec3::new(x, 0.0, y),
+                Vec3::new(x + 1.0, 0.0, y),
+                Vec3::new(x, 0.0, y + 1.0),
+            ]);
+        }
+    }
+    let scene = one(Mesh::from_triangles("planes", &tris));
+    let mut rays = random_rays(6, &scene, 200);
+    rays.push(Ray1::infinite(Vec3::new(-1.0, 0.0, 0.5), Vec3::X)); // in the plane y = 0
+    rays.push(Ray1::infinite(Vec3::new(0.5, 0.5, -1.0), Vec3::Z));
+    check(&scene, &rays);
+}
+
+/// 10^5 triangles: a few hundred rays against brute force.
+pub fn large_scene<L: Lanes>(l: L) {
+    let scene = one(soup("big", 100_000, 20.0, 0.8, 11));
+    let rays = random_rays(12, &scene, 192);
+    let (bf, bsp) = build_both(&scene, &BspParams::default());
+    assert_eq!(bsp.stats().triangles, 100_000);
+    check_all_queries(l, &bf, &bsp, &rays, 13).unwrap();
+}
+
+/// Moving instances and rebuilding the top level answers as a fresh build does.
+pub fn moving_instances<L: Lanes>(l: L, seed: u64) {
+    let scene = random_scene(seed, 120, 2, 5);
+    let mut moved = random_scene(seed ^ 77, 120, 2, 6);
+    moved.meshes = scene.meshes.clone();
+    for i in &mut moved.instances {
+        i.mesh %= scene.meshes.len();
+    }
+    let p = BspParams::default();
+    let mut bsp = Bsp::build(&scene, &p).unwrap();
+    bsp.set_instances(&moved.instances).unwrap();
+    let fresh = Bsp::build(&moved, &p).unwrap();
+    let rays = random_rays(seed, &moved, 256);
+    for r in &rays {
+        assert_eq!(bsp.intersect1(r), fresh.intersect1(r), "{r:?}");
+        assert_eq!(bsp.occluded1(r), fresh.occluded1(r));
+    }
+    for c in rays.chunks(L::N) {
+        let p = Rays::from_fn(l, |i| c[i % c.len()]);
+        let all = l.splat_mask(true);
+        let (a, b) = (bsp.intersect(l, &p, all), fresh.intersect(l, &p, all));
+        for i in 0..L::N {
+            assert_eq!(a.lane(i), b.lane(i));
+        }
+    }
+    let (bf, _) = build_both(&moved, &p);
+    check_all_queries(l, &bf, &bsp, &rays, seed).unwrap();
+    // A bad instance list is refused and names the instance.
+    let mut bad = moved.instances.clone();
+    bad[2].mesh = 9;
+    let e = bsp.set_instances(&bad).unwrap_err().to_string();
+    assert!(e.contains("instance 2"), "{e}");
+}
+
+/// Stamps the tests out for one lane backend: `$name`, the token expression.
+macro_rules! bsp_tests {
+    ($name:ident, $token:expr) => {
+        mod $name {
+            use super::*;
+
+            #[test]
+            fn edge_cases() {
+                super::edge_cases($token);
+            }
+
+            #[test]
+            fn large_scene() {
+                super::large_scene($token);
+            }
+
+            #[test]
+            fn moving_instances() {
+                for seed in 0..4 {
+                    super::moving_instances($token, seed);
+                }
+            }
+
+            proptest! {
+                #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
+
+                #[test]
+                fn random_scenes_match_brute_force(
+                    seed in any::<u64>(),
+                    tris in 1usize..400,
+                    meshes in 1usize..4,
+                    instances in 0usize..7,
+                    preset in 0usize..3,
+                ) {
+                    let l = $token;
+                    let scene = random_scene(seed, tris, meshes, instances);
+                    let rays = random_rays(seed, &scene, 96);
+                    let p = param_sets(lanes_n(l)).swap_remove(preset);
+                    let (bf, bsp) = build_both(&scene, &p);
+                    check_all_queries(l, &bf, &bsp, &rays, seed).map_err(TestCaseError::fail)?;
+                }
+            }
+        }
+    };
+}
+
+fn lanes_n<L: Lanes>(_: L) -> usize {
+    L::N
+}
+
+bsp_tests!(scalar, coherent_simd::scalar::Scalar);
+
+#[test]
+fn object_presets_differ() {
+    let s = one(icosphere("ico", Vec3::ZERO, 1.0, 4));
+    let fast = Bsp::build(
+        &s,
+        &BspParams {
+            object: SahParams::fast(),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let slow = Bsp::build(
+        &s,
+        &BspParams {
+            object: SahParams::slow(),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(
+        fast.stats().nodes < slow.stats().nodes,
+        "{:?} {:?}",
+        fast.stats(),
+        slow.stats()
+    );
+}
