@@ -1,7 +1,7 @@
 //! What can go wrong with the Embree backend, each error naming its cause and its fix.
 
 /// An Embree backend error.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum EmbreeError {
     /// No Embree 4 library could be loaded.
     #[error(
@@ -19,10 +19,16 @@ pub enum EmbreeError {
     /// Embree reported an error from a call.
     #[error("Embree failed to {what}: {code}")]
     Call { what: &'static str, code: String },
-    /// A mesh cannot be handed to Embree.
-    #[error("mesh {mesh}: {problem}")]
-    InvalidMesh { mesh: usize, problem: String },
-    /// An instance cannot be handed to Embree.
-    #[error("instance {instance}: {problem}")]
-    InvalidInstance { instance: usize, problem: String },
+    /// The scene is not valid input (names the mesh or instance).
+    #[error(transparent)]
+    Scene(#[from] coherent_accel::AccelError),
+}
+
+impl From<EmbreeError> for coherent_accel::AccelError {
+    fn from(e: EmbreeError) -> Self {
+        match e {
+            EmbreeError::Scene(e) => e,
+            other => Self::Unavailable { accel: "embree", reason: other.to_string() },
+        }
+    }
 }

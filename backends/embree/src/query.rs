@@ -1,87 +1,26 @@
-//! Ray queries on an Embree scene (the paper's two queries of section 3, plus occlusion):
+//! Ray queries on the Embree scene (the paper's two queries of section 3, plus occlusion):
 //! first hit, all hits (through a filter callback that records and rejects every hit), and
 //! occlusion, for single rays (`rtcIntersect1`) and for packets of 4, 8 and 16 rays
-//! (`rtcIntersect4/8/16` with the COHERENT flag).
+//! (`rtcIntersect4/8/16`, with the COHERENT flag unless the parameters say otherwise).
+//!
+//! Segments: Embree accepts hits in `(tnear, tfar]`, the interface asks for `[tmin, tmax)`;
+//! the two differ only for a hit exactly at a bound.
 
 use core::ffi::c_int;
 
+use coherent_accel::{Hit1, Hits, Ray1, Rays};
+use coherent_simd::{Lanes, SimdF32, SimdMask};
+
 use crate::ffi::{self, RTCRayHitK, RTCRayQueryContext, ValidK};
-use crate::scene::EmbreeScene;
-
-/// One ray: origin, direction, and the segment `[tmin, tmax]` searched.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Ray1 {
-    pub org: [f32; 3],
-    pub dir: [f32; 3],
-    pub tmin: f32,
-    pub tmax: f32,
-}
-
-/// One hit: distance along the ray, barycentrics, triangle and instance.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Hit1 {
-    pub t: f32,
-    pub u: f32,
-    pub v: f32,
-    pub prim: u32,
-    pub inst: u32,
-}
-
-impl Ray1 {
-    /// Rays Embree must not see: non-finite origins or directions, a zero direction, or an
-    /// empty or NaN segment. They miss (Embree's behaviour on them is undefined).
-    #[inline(always)]
-    pub fn is_valid(&self) -> bool {
-        let finite = self.org.iter().chain(&self.dir).all(|x| x.is_finite());
-        let nonzero = self.dir.iter().any(|&x| x != 0.0);
-        finite && nonzero && self.tmin >= 0.0 && self.tmin <= self.tmax
-    }
-}
-
-/// Writes ray `r` into lane `i` of a K-wide packet (id = lane, for the filter callback).
-#[inline(always)]
-pub fn set_lane<const K: usize>(p: &mut RTCRayHitK<K>, i: usize, r: &Ray1) {
-    p.org_x[i] = r.org[0];
-    p.org_y[i] = r.org[1];
-    p.org_z[i] = r.org[2];
-    p.dir_x[i] = r.dir[0];
-    p.dir_y[i] = r.dir[1];
-    p.dir_z[i] = r.dir[2];
-    p.tnear[i] = r.tmin;
-    p.tfar[i] = r.tmax;
-    p.time[i] = 0.0;
-    p.mask[i] = u32::MAX;
-    p.id[i] = i as u32;
-    p.flags[i] = 0;
-    p.geomID[i] = ffi::INVALID_ID;
-    p.instID[0][i] = ffi::INVALID_ID;
-}
-
-/// The hit in lane `i` after an intersect call, if any.
-#[inline(always)]
-pub fn lane_hit<const K: usize>(p: &RTCRayHitK<K>, i: usize) -> Option<Hit1> {
-    (p.geomID[i] != ffi::INVALID_ID).then(|| Hit1 {
-        t: p.tfar[i],
-        u: p.u[i],
-        v: p.v[i],
-        prim: p.primID[i],
-        inst: p.instID[0][i],
-    })
-}
-
-/// Whether lane `i` was found occluded after an occluded call (Embree sets `tfar` to -inf).
-#[inline(always)]
-pub fn lane_occluded<const K: usize>(p: &RTCRayHitK<K>, i: usize) -> bool {
-    p.tfar[i] == f32::NEG_INFINITY
-}
+use crate::scene::Embree;
 
 /// The context of an all-hits query: Embree's context first (the library sees only that),
 /// then where the filter callback records the hits.
 #[repr(C)]
 struct AllHitsContext {
     base: RTCRayQueryContext,
-    /// (lane, hit), deduplicated per lane (a triangle split into several BVH leaves is
-    /// reported once per leaf).
+    /// (lane, hit), each (lane, triangle, instance) once: a triangle split into several BVH
+    /// leaves (spatial splits) is reported once per leaf.
     hits: *mut Vec<(u32, Hit1)>,
 }
 
@@ -98,21 +37,21 @@ unsafe extern "C" fn record_and_reject(args: *const ffi::RTCFilterFunctionNArgum
         let n = args.N as usize;
         let ctx = &*(args.context as *const AllHitsContext);
         let hits = &mut *ctx.hits;
-        let ray = args.ray;
-        let hit = args.hit;
+        let word = |base: *mut f32, row: usize, i: usize| base.add(row * n + i);
         for i in 0..n {
             let valid = args.valid.add(i);
             if *valid == 0 {
                 continue;
             }
-            let word = |base: *mut f32, row: usize| base.add(row * n + i);
-            let lane = *(word(ray, 10) as *const u32);
+            // RTCRayN rows: org 0-2, tnear 3, dir 4-6, time 7, tfar 8, mask 9, id 10.
+            // RTCHitN rows: Ng 0-2, u 3, v 4, primID 5, geomID 6, instID 7, instPrimID 8.
+            let lane = *(word(args.ray, 10, i) as *const u32);
             let h = Hit1 {
-                t: *word(ray, 8),
-                u: *word(hit, 3),
-                v: *word(hit, 4),
-                prim: *(word(hit, 5) as *const u32),
-                inst: *(word(hit, 7) as *const u32),
+                t: *word(args.ray, 8, i),
+                u: *word(args.hit, 3, i),
+                v: *word(args.hit, 4, i),
+                prim: *(word(args.hit, 5, i) as *const u32),
+                inst: *(word(args.hit, 7, i) as *const u32),
             };
             if !hits.iter().any(|&(l, o)| l == lane && o.prim == h.prim && o.inst == h.inst) {
                 hits.push((lane, h));
@@ -122,49 +61,125 @@ unsafe extern "C" fn record_and_reject(args: *const ffi::RTCFilterFunctionNArgum
     }
 }
 
-/// Ray `r` with an empty hit, as `rtcIntersect1` takes it.
-#[inline(always)]
-fn ray_hit1(r: &Ray1) -> ffi::RTCRayHit {
-    ffi::RTCRayHit {
-        ray: ffi::RTCRay {
-            org_x: r.org[0],
-            org_y: r.org[1],
-            org_z: r.org[2],
-            tnear: r.tmin,
-            dir_x: r.dir[0],
-            dir_y: r.dir[1],
-            dir_z: r.dir[2],
-            time: 0.0,
-            tfar: r.tmax,
-            mask: u32::MAX,
-            id: 0,
-            flags: 0,
-        },
-        hit: ffi::RTCHit {
-            geomID: ffi::INVALID_ID,
-            instID: [ffi::INVALID_ID],
-            ..Default::default()
-        },
-    }
-}
-
 fn flags(coherent: bool) -> c_int {
     if coherent { ffi::RAY_QUERY_FLAG_COHERENT } else { ffi::RAY_QUERY_FLAG_INCOHERENT }
 }
 
-impl EmbreeScene {
+/// A ray as Embree is asked it: Embree searches `t >= 0` only, so a ray with `tmin < 0` is
+/// clipped to the scene's box and its origin moved to the clipped start `s < 0`; Embree's
+/// `t` plus `shift` is then the ray's `t`. `None`: the ray misses the scene's box.
+#[derive(Clone, Copy, Debug)]
+struct Segment {
+    origin: glam::Vec3,
+    tnear: f32,
+    tfar: f32,
+    shift: f32,
+}
+
+impl Embree {
+    #[inline(always)]
+    fn segment(&self, r: &Ray1) -> Option<Segment> {
+        if r.tmin >= 0.0 {
+            return Some(Segment { origin: r.origin, tnear: r.tmin, tfar: r.tmax, shift: 0.0 });
+        }
+        let (t0, _) = self.bounds.clip1(r.origin, r.dir.recip(), r.tmin, r.tmax)?;
+        if t0 >= 0.0 {
+            return Some(Segment { origin: r.origin, tnear: 0.0, tfar: r.tmax, shift: 0.0 });
+        }
+        Some(Segment {
+            origin: r.origin + r.dir * t0,
+            tnear: 0.0,
+            tfar: r.tmax - t0,
+            shift: t0,
+        })
+    }
+}
+
+/// Ray `r` with an empty hit, as `rtcIntersect1` takes it.
+#[inline(always)]
+fn ray_hit1(r: &Ray1, s: &Segment) -> ffi::RTCRayHit {
+    ffi::RTCRayHit {
+        ray: ffi::RTCRay {
+            org_x: s.origin.x,
+            org_y: s.origin.y,
+            org_z: s.origin.z,
+            tnear: s.tnear,
+            dir_x: r.dir.x,
+            dir_y: r.dir.y,
+            dir_z: r.dir.z,
+            time: 0.0,
+            tfar: s.tfar,
+            mask: u32::MAX,
+            id: 0,
+            flags: 0,
+        },
+        hit: ffi::RTCHit { geomID: ffi::INVALID_ID, instID: [ffi::INVALID_ID], ..Default::default() },
+    }
+}
+
+/// A K-wide packet of `rays` (lane ids for the filter callback), the valid mask of the
+/// lanes on in `active` that hold valid rays (Embree's answer on invalid rays is undefined)
+/// and meet the scene's box if `tmin < 0`, the lanes' bits, and each lane's `t` shift.
+#[inline(always)]
+fn packet<L: Lanes, const K: usize>(
+    e: &Embree,
+    l: L,
+    rays: &Rays<L>,
+    active: L::Mask,
+) -> (RTCRayHitK<K>, ValidK<K>, u32, Option<[f32; K]>) {
+    debug_assert_eq!(L::N, K);
+    let mut bits = (active & rays.valid(l)).bitmask();
+    let mut p = RTCRayHitK::<K>::default();
+    rays.origin.x.store(&mut p.org_x);
+    rays.origin.y.store(&mut p.org_y);
+    rays.origin.z.store(&mut p.org_z);
+    rays.dir.x.store(&mut p.dir_x);
+    rays.dir.y.store(&mut p.dir_y);
+    rays.dir.z.store(&mut p.dir_z);
+    rays.tmin.store(&mut p.tnear);
+    rays.tmax.store(&mut p.tfar);
+    p.id = core::array::from_fn(|i| i as u32);
+    let mut shift = None;
+    if bits != 0 && rays.tmin.reduce_min() < 0.0 {
+        // Rare: lanes searching behind their origin, one at a time.
+        let mut s = [0.0f32; K];
+        for (i, si) in s.iter_mut().enumerate() {
+            if bits >> i & 1 == 0 || p.tnear[i] >= 0.0 {
+                continue;
+            }
+            match e.segment(&rays.lane(i)) {
+                Some(seg) => {
+                    [p.org_x[i], p.org_y[i], p.org_z[i]] = seg.origin.to_array();
+                    (p.tnear[i], p.tfar[i], *si) = (seg.tnear, seg.tfar, seg.shift);
+                }
+                None => bits &= !(1 << i),
+            }
+        }
+        shift = Some(s);
+    }
+    let valid = ValidK(core::array::from_fn(|i| if bits >> i & 1 == 1 { -1 } else { 0 }));
+    (p, valid, bits, shift)
+}
+
+/// A valid mask with the first `n` lanes on.
+pub fn valid_lanes<const K: usize>(n: usize) -> ValidK<K> {
+    ValidK(core::array::from_fn(|i| if i < n { -1 } else { 0 }))
+}
+
+impl Embree {
     /// First hit of one ray (`rtcIntersect1`).
-    pub fn intersect1(&self, r: &Ray1) -> Option<Hit1> {
+    pub fn first_hit1(&self, r: &Ray1) -> Option<Hit1> {
         if !r.is_valid() {
             return None;
         }
-        let mut rh = ray_hit1(r);
+        let seg = self.segment(r)?;
+        let mut rh = ray_hit1(r, &seg);
         let mut args = ffi::RTCIntersectArguments::new(ffi::RAY_QUERY_FLAG_INCOHERENT);
         // SAFETY: a committed scene, a ray/hit of the library's layout, arguments set as
         // `rtcInitIntersectArguments` does.
         unsafe { (self.device.api.intersect1)(self.top, &mut rh, &mut args) };
-        (rh.hit.geomID != ffi::INVALID_ID).then(|| Hit1 {
-            t: rh.ray.tfar,
+        (rh.hit.geomID != ffi::INVALID_ID).then_some(Hit1 {
+            t: rh.ray.tfar + seg.shift,
             u: rh.hit.u,
             v: rh.hit.v,
             prim: rh.hit.primID,
@@ -173,23 +188,29 @@ impl EmbreeScene {
     }
 
     /// Whether anything lies on the ray's segment (`rtcOccluded1`).
-    pub fn occluded1(&self, r: &Ray1) -> bool {
+    pub fn any_hit1(&self, r: &Ray1) -> bool {
         if !r.is_valid() {
             return false;
         }
-        let mut ray = ray_hit1(r).ray;
+        let Some(seg) = self.segment(r) else {
+            return false;
+        };
+        let mut ray = ray_hit1(r, &seg).ray;
         let mut args = ffi::RTCOccludedArguments::new(ffi::RAY_QUERY_FLAG_INCOHERENT);
-        // SAFETY: as in `intersect1`.
+        // SAFETY: as in `first_hit1`.
         unsafe { (self.device.api.occluded1)(self.top, &mut ray, &mut args) };
         ray.tfar == f32::NEG_INFINITY
     }
 
-    /// Every hit on the ray's segment, in no particular order, each (triangle, instance)
-    /// once, appended to `out` (`rtcIntersect1` with a filter that records and rejects).
-    pub fn all_hits1(&self, r: &Ray1, out: &mut Vec<Hit1>) {
+    /// Every hit on the ray's segment, each (triangle, instance) once, in no particular
+    /// order (`rtcIntersect1` with a filter that records and rejects every hit).
+    pub fn every_hit1(&self, r: &Ray1, f: &mut impl FnMut(Hit1)) {
         if !r.is_valid() {
             return;
         }
+        let Some(seg) = self.segment(r) else {
+            return;
+        };
         let mut hits = Vec::new();
         let mut ctx = AllHitsContext { base: RTCRayQueryContext::default(), hits: &mut hits };
         let mut args = ffi::RTCIntersectArguments::new(
@@ -197,43 +218,35 @@ impl EmbreeScene {
         );
         args.context = (&mut ctx as *mut AllHitsContext).cast();
         args.filter = Some(record_and_reject);
-        let mut rh = ray_hit1(r);
-        // SAFETY: as in `intersect1`; the context outlives the call.
+        let mut rh = ray_hit1(r, &seg);
+        // SAFETY: as in `first_hit1`; the context outlives the call.
         unsafe { (self.device.api.intersect1)(self.top, &mut rh, &mut args) };
-        out.extend(hits.into_iter().map(|(_, h)| h));
+        hits.into_iter().for_each(|(_, h)| f(Hit1 { t: h.t + seg.shift, ..h }));
     }
 
     /// First hits of a K-wide packet (K = 4, 8, 16) for the lanes on in `valid`; results
-    /// are read back with [`lane_hit`]. `coherent` sets Embree's COHERENT query flag.
-    pub fn intersect_k<const K: usize>(
-        &self,
-        p: &mut RTCRayHitK<K>,
-        valid: &ValidK<K>,
-        coherent: bool,
-    ) {
-        let mut args = ffi::RTCIntersectArguments::new(flags(coherent));
+    /// are read back from the packet (`geomID` != invalid: `tfar`, `u`, `v`, `primID`,
+    /// `instID`).
+    pub fn intersect_k<const K: usize>(&self, p: &mut RTCRayHitK<K>, valid: &ValidK<K>) {
+        let mut args = ffi::RTCIntersectArguments::new(flags(self.params.coherent));
         self.call_intersect(p, valid, &mut args);
     }
 
-    /// Occlusion of a K-wide packet; results are read back with [`lane_occluded`].
-    pub fn occluded_k<const K: usize>(
-        &self,
-        p: &mut RTCRayHitK<K>,
-        valid: &ValidK<K>,
-        coherent: bool,
-    ) {
-        let mut args = ffi::RTCOccludedArguments::new(flags(coherent));
+    /// Occlusion of a K-wide packet (occluded lanes get `tfar = -inf`).
+    pub fn occluded_k<const K: usize>(&self, p: &mut RTCRayHitK<K>, valid: &ValidK<K>) {
         const { assert!(K == 4 || K == 8 || K == 16, "Embree has 4, 8 and 16-wide packets") };
+        let mut args = ffi::RTCOccludedArguments::new(flags(self.params.coherent));
         let api = self.device.api;
         let v = valid.0.as_ptr();
-        // SAFETY: the K-wide call matching K; `p` and `valid` have the library's layout and
-        // alignment for K; arguments set as `rtcInitOccludedArguments` does.
+        let p = (p as *mut RTCRayHitK<K>).cast();
+        // SAFETY: the K-wide call matching K; `p` (whose ray part is an RTCRayK) and `valid`
+        // have the library's layout and alignment for K; arguments set as
+        // `rtcInitOccludedArguments` does.
         unsafe {
             match K {
-                4 => (api.occluded4)(v, self.top, (p as *mut RTCRayHitK<K>).cast(), &mut args),
-                8 => (api.occluded8)(v, self.top, (p as *mut RTCRayHitK<K>).cast(), &mut args),
-                16 => (api.occluded16)(v, self.top, (p as *mut RTCRayHitK<K>).cast(), &mut args),
-                _ => unreachable!("Embree has no {K}-wide packets"),
+                4 => (api.occluded4)(v, self.top, p, &mut args),
+                8 => (api.occluded8)(v, self.top, p.cast(), &mut args),
+                _ => (api.occluded16)(v, self.top, p.cast(), &mut args),
             }
         }
     }
@@ -244,12 +257,11 @@ impl EmbreeScene {
         &self,
         p: &mut RTCRayHitK<K>,
         valid: &ValidK<K>,
-        coherent: bool,
         hits: &mut Vec<(u32, Hit1)>,
     ) {
         let mut ctx = AllHitsContext { base: RTCRayQueryContext::default(), hits };
         let mut args = ffi::RTCIntersectArguments::new(
-            flags(coherent) | ffi::RAY_QUERY_FLAG_INVOKE_ARGUMENT_FILTER,
+            flags(self.params.coherent) | ffi::RAY_QUERY_FLAG_INVOKE_ARGUMENT_FILTER,
         );
         args.context = (&mut ctx as *mut AllHitsContext).cast();
         args.filter = Some(record_and_reject);
@@ -265,19 +277,81 @@ impl EmbreeScene {
         const { assert!(K == 4 || K == 8 || K == 16, "Embree has 4, 8 and 16-wide packets") };
         let api = self.device.api;
         let v = valid.0.as_ptr();
+        let p = (p as *mut RTCRayHitK<K>).cast();
         // SAFETY: as in `occluded_k`.
         unsafe {
             match K {
-                4 => (api.intersect4)(v, self.top, (p as *mut RTCRayHitK<K>).cast(), args),
-                8 => (api.intersect8)(v, self.top, (p as *mut RTCRayHitK<K>).cast(), args),
-                16 => (api.intersect16)(v, self.top, (p as *mut RTCRayHitK<K>).cast(), args),
-                _ => unreachable!("Embree has no {K}-wide packets"),
+                4 => (api.intersect4)(v, self.top, p, args),
+                8 => (api.intersect8)(v, self.top, p.cast(), args),
+                _ => (api.intersect16)(v, self.top, p.cast(), args),
             }
         }
     }
-}
 
-/// A valid mask with the first `n` lanes on.
-pub fn valid_lanes<const K: usize>(n: usize) -> ValidK<K> {
-    ValidK(core::array::from_fn(|i| if i < n { -1 } else { 0 }))
+    /// [`coherent_accel::Accel::intersect`] for `L::N == K`.
+    #[inline(always)]
+    pub(crate) fn intersect_packet<L: Lanes, const K: usize>(
+        &self,
+        l: L,
+        rays: &Rays<L>,
+        active: L::Mask,
+    ) -> Hits<L> {
+        let (mut p, valid, bits, shift) = packet::<L, K>(self, l, rays, active);
+        if bits == 0 {
+            return Hits::miss(l);
+        }
+        self.intersect_k(&mut p, &valid);
+        if let Some(s) = shift {
+            p.tfar = core::array::from_fn(|i| p.tfar[i] + s[i]);
+        }
+        let hit: [bool; K] = core::array::from_fn(|i| p.geomID[i] != ffi::INVALID_ID);
+        let m = l.mask_from_fn(|i| hit[i]);
+        let miss = Hits::miss(l);
+        let id = |a: &[u32; K]| l.load_i32(&a.map(|x| x as i32));
+        let got = Hits {
+            t: l.load(&p.tfar),
+            u: l.load(&p.u),
+            v: l.load(&p.v),
+            prim: id(&p.primID),
+            inst: id(&p.instID[0]),
+        };
+        Hits::select(m, &got, &miss)
+    }
+
+    /// [`coherent_accel::Accel::occluded`] for `L::N == K`.
+    #[inline(always)]
+    pub(crate) fn occluded_packet<L: Lanes, const K: usize>(
+        &self,
+        l: L,
+        rays: &Rays<L>,
+        active: L::Mask,
+    ) -> L::Mask {
+        let (mut p, valid, bits, _) = packet::<L, K>(self, l, rays, active);
+        if bits == 0 {
+            return l.splat_mask(false);
+        }
+        self.occluded_k(&mut p, &valid);
+        l.load(&p.tfar).eq(l.splat(f32::NEG_INFINITY)) & l.mask_from_bits(bits)
+    }
+
+    /// [`coherent_accel::Accel::intersect_all`] for `L::N == K`.
+    #[inline(always)]
+    pub(crate) fn intersect_all_packet<L: Lanes, const K: usize>(
+        &self,
+        l: L,
+        rays: &Rays<L>,
+        active: L::Mask,
+        f: &mut impl FnMut(usize, Hit1),
+    ) {
+        let (mut p, valid, bits, shift) = packet::<L, K>(self, l, rays, active);
+        if bits == 0 {
+            return;
+        }
+        let mut hits = Vec::new();
+        self.all_hits_k(&mut p, &valid, &mut hits);
+        let s = shift.unwrap_or([0.0; K]);
+        hits.into_iter().for_each(|(lane, h)| {
+            f(lane as usize, Hit1 { t: h.t + s[lane as usize], ..h })
+        });
+    }
 }

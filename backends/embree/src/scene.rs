@@ -2,14 +2,19 @@
 //! one Embree scene per mesh holding its triangle geometry, and a top scene holding one
 //! instance geometry per instance, attached under the instance's index so that Embree's
 //! `instID` is our instance id and its `primID` our triangle index.
+//!
+//! `embree4-rs` is not used: its `Scene` keeps the scene handle private and its `Device`
+//! the device handle crate-private, so the packet calls (`rtcIntersect16`) cannot be made on
+//! a scene it built.
 
 use std::time::Instant;
 
-use glam::{Affine3A, Vec3};
+use coherent_accel::{Aabb, BuildStats, Instance, Scene, TriAccel};
+use glam::Affine3A;
 
-use crate::device::Device;
-use crate::ffi::{self, RTCGeometry, RTCScene};
 use crate::EmbreeError;
+use crate::device::Device;
+use crate::ffi::{self, RTCScene};
 
 /// Embree's build quality (`RTCBuildQuality`): its BVH builder's effort.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -55,7 +60,7 @@ impl core::str::FromStr for BuildQuality {
 
 /// How the scene is built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct BuildParams {
+pub struct EmbreeParams {
     /// Quality of each mesh's BVH (built once).
     pub mesh_quality: BuildQuality,
     /// Quality of the top level over the instances (rebuilt when instances move).
@@ -64,96 +69,45 @@ pub struct BuildParams {
     pub robust: bool,
     /// Build threads (`None`: Embree's default, all cores). 1 for a single-thread comparison.
     pub threads: Option<usize>,
+    /// Packets carry Embree's COHERENT query flag (rays of a packet travel together).
+    pub coherent: bool,
 }
 
-impl Default for BuildParams {
+impl Default for EmbreeParams {
     /// High-quality meshes (they are built once), a fast top level, one build thread: the
-    /// same split of effort as the paper's two-level BSP.
+    /// same split of effort as the paper's two-level BSP; coherent packets.
     fn default() -> Self {
         Self {
             mesh_quality: BuildQuality::High,
             top_quality: BuildQuality::Low,
             robust: false,
             threads: Some(1),
+            coherent: true,
         }
     }
 }
 
-/// One mesh for Embree: vertex positions and triangles (indices into `positions`).
-#[derive(Clone, Copy, Debug)]
-pub struct MeshRef<'a> {
-    pub positions: &'a [Vec3],
-    pub indices: &'a [[u32; 3]],
-}
-
-/// One placed copy of a mesh.
-#[derive(Clone, Copy, Debug)]
-pub struct InstanceRef {
-    pub mesh: usize,
-    pub world_from_object: Affine3A,
-}
-
-/// A committed two-level Embree scene.
-pub struct EmbreeScene {
+/// The Embree accelerator: a committed two-level Embree scene.
+pub struct Embree {
     /// One scene per mesh (its triangle geometry is held by the scene).
     meshes: Vec<RTCScene>,
-    /// One instance geometry per instance (kept to move the instance).
-    instances: Vec<RTCGeometry>,
+    /// Each mesh's box, in object space.
+    mesh_bounds: Vec<Aabb>,
+    /// The world box of every instance, grown a little (rays with `tmin < 0` are clipped to
+    /// it: Embree searches `t >= 0` only).
+    pub(crate) bounds: Aabb,
     /// The top scene over the instances.
     pub(crate) top: RTCScene,
-    params: BuildParams,
-    build_ms: f64,
+    pub(crate) params: EmbreeParams,
+    pub(crate) stats: BuildStats,
     /// Dropped last: the scenes above are released first (see `Drop`).
     pub(crate) device: Device,
 }
 
 // SAFETY: a committed Embree scene may be queried from any number of threads at once (the
-// library's documented contract); changes (`move_instance`) take `&mut self`.
-unsafe impl Send for EmbreeScene {}
-unsafe impl Sync for EmbreeScene {}
-
-fn validate(meshes: &[MeshRef<'_>], instances: &[InstanceRef]) -> Result<(), EmbreeError> {
-    for (m, mesh) in meshes.iter().enumerate() {
-        if let Some(v) = mesh.positions.iter().position(|p| !p.is_finite()) {
-            return Err(EmbreeError::InvalidMesh {
-                mesh: m,
-                problem: format!("vertex {v} is not finite ({})", mesh.positions[v]),
-            });
-        }
-        let n = mesh.positions.len();
-        if let Some(t) = mesh.indices.iter().position(|tri| tri.iter().any(|&i| i as usize >= n)) {
-            return Err(EmbreeError::InvalidMesh {
-                mesh: m,
-                problem: format!(
-                    "triangle {t} has index {:?} out of range ({n} vertices)",
-                    mesh.indices[t]
-                ),
-            });
-        }
-    }
-    for (i, inst) in instances.iter().enumerate() {
-        check_instance(i, inst, meshes.len())?;
-    }
-    Ok(())
-}
-
-fn check_instance(i: usize, inst: &InstanceRef, meshes: usize) -> Result<(), EmbreeError> {
-    if inst.mesh >= meshes {
-        return Err(EmbreeError::InvalidInstance {
-            instance: i,
-            problem: format!("mesh {} out of range ({meshes} meshes)", inst.mesh),
-        });
-    }
-    let m = inst.world_from_object;
-    let det = m.matrix3.determinant();
-    if !m.matrix3.is_finite() || !m.translation.is_finite() || det == 0.0 || !det.is_finite() {
-        return Err(EmbreeError::InvalidInstance {
-            instance: i,
-            problem: format!("world_from_object is not finite and invertible ({m:?})"),
-        });
-    }
-    Ok(())
-}
+// library's documented contract); changes (`set_instances`) take `&mut self`.
+unsafe impl Send for Embree {}
+unsafe impl Sync for Embree {}
 
 /// `world_from_object` as Embree's `FLOAT3X4_COLUMN_MAJOR`: the three axes, then the
 /// translation.
@@ -162,72 +116,45 @@ fn column_major(m: &Affine3A) -> [f32; 12] {
     [x.x, x.y, x.z, y.x, y.y, y.z, z.x, z.y, z.z, t.x, t.y, t.z]
 }
 
-impl EmbreeScene {
-    /// Builds the meshes' scenes and the top scene. Fails with the mesh or instance at fault
-    /// for non-finite vertices, out-of-range indices, unknown meshes and singular transforms;
-    /// degenerate triangles are kept (Embree never reports a hit on them).
-    pub fn build(
-        meshes: &[MeshRef<'_>],
-        instances: &[InstanceRef],
-        params: BuildParams,
-    ) -> Result<Self, EmbreeError> {
-        validate(meshes, instances)?;
+impl Embree {
+    /// Builds the meshes' scenes and the top scene. The scene is validated first (errors
+    /// name the mesh or instance); degenerate triangles (those [`TriAccel`] rejects) are
+    /// handed to Embree as a single point, so they are never hit, and counted.
+    pub fn build_scene(scene: &Scene, params: &EmbreeParams) -> Result<Self, EmbreeError> {
+        scene.validate()?;
         let device = Device::new(params.threads)?;
         let start = Instant::now();
-        let api = device.api;
-        let mut scene = Self {
-            meshes: Vec::with_capacity(meshes.len()),
-            instances: Vec::with_capacity(instances.len()),
+        let mut e = Self {
+            meshes: Vec::with_capacity(scene.meshes.len()),
+            mesh_bounds: scene.meshes.iter().map(|m| m.bounds()).collect(),
+            bounds: Aabb::EMPTY,
             top: core::ptr::null_mut(),
-            params,
-            build_ms: 0.0,
+            params: *params,
+            stats: BuildStats::default(),
             device,
         };
-        let flags = ffi::SCENE_FLAG_FILTER_FUNCTION_IN_ARGUMENTS
-            | if params.robust { ffi::SCENE_FLAG_ROBUST } else { ffi::SCENE_FLAG_NONE };
-        for mesh in meshes {
-            let raw = scene.new_scene(params.mesh_quality, flags)?;
-            scene.meshes.push(raw);
-            if !mesh.indices.is_empty() {
-                scene.attach_triangles(raw, mesh, params.mesh_quality)?;
-            }
+        for mesh in &scene.meshes {
+            let raw = e.new_scene(params.mesh_quality)?;
+            e.meshes.push(raw);
+            let (kept, degenerate) = e.attach_triangles(raw, mesh)?;
+            e.stats.triangles += kept;
+            e.stats.degenerate += degenerate;
             // SAFETY: a live scene with committed geometry.
-            unsafe { (api.commit_scene)(raw) };
-            scene.device.check("build a mesh's BVH")?;
+            unsafe { (e.device.api.commit_scene)(raw) };
+            e.device.check("build a mesh's BVH")?;
         }
-        scene.top = scene.new_scene(params.top_quality, flags)?;
-        for (i, inst) in instances.iter().enumerate() {
-            // SAFETY: a live device; instance is a geometry type of every Embree 4.
-            let geom = unsafe { (api.new_geometry)(scene.device.raw, ffi::GEOMETRY_TYPE_INSTANCE) };
-            scene.device.check("create an instance")?;
-            scene.instances.push(geom);
-            // SAFETY: live handles; the transform array outlives the call (Embree copies it).
-            unsafe {
-                (api.set_geometry_instanced_scene)(geom, scene.meshes[inst.mesh]);
-                let xfm = column_major(&inst.world_from_object);
-                (api.set_geometry_transform)(
-                    geom,
-                    0,
-                    ffi::FORMAT_FLOAT3X4_COLUMN_MAJOR,
-                    xfm.as_ptr().cast(),
-                );
-                (api.commit_geometry)(geom);
-                (api.attach_geometry_by_id)(scene.top, geom, i as u32);
-            }
-            scene.device.check("attach an instance")?;
-        }
-        // SAFETY: a live scene whose geometries are committed.
-        unsafe { (api.commit_scene)(scene.top) };
-        scene.device.check("build the top level")?;
-        scene.build_ms = start.elapsed().as_secs_f64() * 1e3;
-        Ok(scene)
+        e.build_top(&scene.instances)?;
+        e.stats.build_seconds = start.elapsed().as_secs_f64();
+        e.stats.memory_bytes = e.device.memory_bytes();
+        Ok(e)
     }
 
-    fn new_scene(
-        &self,
-        quality: BuildQuality,
-        flags: core::ffi::c_int,
-    ) -> Result<RTCScene, EmbreeError> {
+    fn scene_flags(&self) -> core::ffi::c_int {
+        ffi::SCENE_FLAG_FILTER_FUNCTION_IN_ARGUMENTS
+            | if self.params.robust { ffi::SCENE_FLAG_ROBUST } else { ffi::SCENE_FLAG_NONE }
+    }
+
+    fn new_scene(&self, quality: BuildQuality) -> Result<RTCScene, EmbreeError> {
         let api = self.device.api;
         // SAFETY: a live device.
         let raw = unsafe { (api.new_scene)(self.device.raw) };
@@ -235,27 +162,29 @@ impl EmbreeScene {
         // SAFETY: a live scene; quality and flags are header values.
         unsafe {
             (api.set_scene_build_quality)(raw, quality.raw());
-            (api.set_scene_flags)(raw, flags);
+            (api.set_scene_flags)(raw, self.scene_flags());
         }
         self.device.check("set up a scene")?;
         Ok(raw)
     }
 
+    /// Hands the mesh to Embree as one triangle geometry (geometry id 0 of `raw`); returns
+    /// the triangles kept and dropped as degenerate.
     fn attach_triangles(
         &self,
         raw: RTCScene,
-        mesh: &MeshRef<'_>,
-        quality: BuildQuality,
-    ) -> Result<(), EmbreeError> {
+        mesh: &coherent_accel::Mesh,
+    ) -> Result<(usize, usize), EmbreeError> {
         let api = self.device.api;
         // SAFETY: a live device.
         let geom = unsafe { (api.new_geometry)(self.device.raw, ffi::GEOMETRY_TYPE_TRIANGLE) };
         self.device.check("create a triangle geometry")?;
-        // SAFETY: buffers are allocated by Embree with the requested size and stride (the
-        // vertex buffer padded by Embree as its documentation requires for FLOAT3), written
-        // in full before the geometry is committed.
+        let mut degenerate = 0;
+        // SAFETY: buffers are allocated by Embree with the requested size and stride (Embree
+        // pads the vertex buffer for its 16-byte loads), written in full before the geometry
+        // is committed.
         unsafe {
-            (api.set_geometry_build_quality)(geom, quality.raw());
+            (api.set_geometry_build_quality)(geom, self.params.mesh_quality.raw());
             let vertices = (api.set_new_geometry_buffer)(
                 geom,
                 ffi::BUFFER_TYPE_VERTEX,
@@ -279,57 +208,88 @@ impl EmbreeScene {
             for (i, p) in mesh.positions.iter().enumerate() {
                 vertices.add(i).write(p.to_array());
             }
-            core::ptr::copy_nonoverlapping(mesh.indices.as_ptr(), indices, mesh.indices.len());
+            for (i, &tri) in mesh.indices.iter().enumerate() {
+                let tri = if TriAccel::new(mesh.triangle(i), i as u32).is_some() {
+                    tri
+                } else {
+                    degenerate += 1;
+                    [tri[0]; 3]
+                };
+                indices.add(i).write(tri);
+            }
             (api.commit_geometry)(geom);
             (api.attach_geometry_by_id)(raw, geom, 0);
             // The scene holds the geometry now.
             (api.release_geometry)(geom);
         }
-        self.device.check("attach a mesh")
+        self.device.check("attach a mesh")?;
+        Ok((mesh.indices.len() - degenerate, degenerate))
     }
 
-    /// Moves instance `i` and rebuilds the top level only (the meshes' BVHs are kept).
-    pub fn move_instance(
-        &mut self,
-        i: usize,
-        world_from_object: Affine3A,
-    ) -> Result<(), EmbreeError> {
-        let inst = InstanceRef { mesh: 0, world_from_object };
-        check_instance(i, &inst, usize::MAX)?;
-        let Some(&geom) = self.instances.get(i) else {
-            return Err(EmbreeError::InvalidInstance {
-                instance: i,
-                problem: format!("no such instance ({} instances)", self.instances.len()),
-            });
-        };
-        let api = self.device.api;
+    /// (Re)builds the top scene: one instance geometry per instance, attached under the
+    /// instance's index.
+    fn build_top(&mut self, instances: &[Instance]) -> Result<(), EmbreeError> {
+        coherent_accel::scene::validate_instances(instances, self.meshes.len())?;
         let start = Instant::now();
-        let xfm = column_major(&world_from_object);
-        // SAFETY: live handles; Embree copies the transform.
-        unsafe {
-            (api.set_geometry_transform)(geom, 0, ffi::FORMAT_FLOAT3X4_COLUMN_MAJOR, xfm.as_ptr().cast());
-            (api.commit_geometry)(geom);
-            (api.commit_scene)(self.top);
+        let api = self.device.api;
+        if !self.top.is_null() {
+            // SAFETY: the old top scene is live and released once; it holds its instances.
+            unsafe { (api.release_scene)(self.top) };
+            self.top = core::ptr::null_mut();
         }
-        self.device.check("rebuild the top level")?;
-        self.build_ms = start.elapsed().as_secs_f64() * 1e3;
+        self.top = self.new_scene(self.params.top_quality)?;
+        for (i, inst) in instances.iter().enumerate() {
+            // SAFETY: a live device; instance is a geometry type of every Embree 4.
+            let geom =
+                unsafe { (api.new_geometry)(self.device.raw, ffi::GEOMETRY_TYPE_INSTANCE) };
+            self.device.check("create an instance")?;
+            let xfm = column_major(&inst.world_from_object);
+            // SAFETY: live handles; Embree copies the transform; the top scene holds the
+            // geometry after attaching it.
+            unsafe {
+                (api.set_geometry_instanced_scene)(geom, self.meshes[inst.mesh]);
+                (api.set_geometry_transform)(
+                    geom,
+                    0,
+                    ffi::FORMAT_FLOAT3X4_COLUMN_MAJOR,
+                    xfm.as_ptr().cast(),
+                );
+                (api.commit_geometry)(geom);
+                (api.attach_geometry_by_id)(self.top, geom, i as u32);
+                (api.release_geometry)(geom);
+            }
+            self.device.check("attach an instance")?;
+        }
+        // SAFETY: a live scene whose geometries are committed.
+        unsafe { (api.commit_scene)(self.top) };
+        self.device.check("build the top level")?;
+        let world = instances.iter().fold(Aabb::EMPTY, |b, i| {
+            b.union(self.mesh_bounds[i.mesh].transformed(&i.world_from_object))
+        });
+        let margin = if world.is_empty() {
+            glam::Vec3::ZERO
+        } else {
+            glam::Vec3::splat(1e-4 * world.extent().max_element() + 1e-6)
+        };
+        self.bounds = if world.is_empty() {
+            world
+        } else {
+            Aabb::new(world.min - margin, world.max + margin)
+        };
+        self.stats.instances = instances.len();
+        self.stats.top_build_seconds = start.elapsed().as_secs_f64();
         Ok(())
     }
 
-    /// Milliseconds of the last build (all levels after `build`, the top level after
-    /// `move_instance`).
-    pub fn build_ms(&self) -> f64 {
-        self.build_ms
-    }
-
-    /// Bytes the Embree device holds for this scene (buffers and BVHs, as its memory
-    /// monitor counts them).
-    pub fn memory_bytes(&self) -> usize {
-        self.device.memory_bytes()
+    /// Replaces the instances and rebuilds the top level only (the meshes' BVHs are kept).
+    pub fn replace_instances(&mut self, instances: &[Instance]) -> Result<(), EmbreeError> {
+        self.build_top(instances)?;
+        self.stats.memory_bytes = self.device.memory_bytes();
+        Ok(())
     }
 
     /// The parameters the scene was built with.
-    pub fn params(&self) -> BuildParams {
+    pub fn params(&self) -> EmbreeParams {
         self.params
     }
 
@@ -337,21 +297,13 @@ impl EmbreeScene {
     pub fn device(&self) -> &Device {
         &self.device
     }
-
-    /// Number of instances.
-    pub fn instance_count(&self) -> usize {
-        self.instances.len()
-    }
 }
 
-impl Drop for EmbreeScene {
+impl Drop for Embree {
     fn drop(&mut self) {
         let api = self.device.api;
         // SAFETY: every handle is live and released once, before the device.
         unsafe {
-            for &g in &self.instances {
-                (api.release_geometry)(g);
-            }
             if !self.top.is_null() {
                 (api.release_scene)(self.top);
             }
