@@ -79,19 +79,8 @@ struct Segment {
 impl Embree {
     #[inline(always)]
     fn segment(&self, r: &Ray1) -> Option<Segment> {
-        if r.tmin >= 0.0 {
-            return Some(Segment { origin: r.origin, tnear: r.tmin, tfar: r.tmax, shift: 0.0 });
-        }
-        let (t0, _) = self.bounds.clip1(r.origin, r.dir.recip(), r.tmin, r.tmax)?;
-        if t0 >= 0.0 {
-            return Some(Segment { origin: r.origin, tnear: 0.0, tfar: r.tmax, shift: 0.0 });
-        }
-        Some(Segment {
-            origin: r.origin + r.dir * t0,
-            tnear: 0.0,
-            tfar: r.tmax - t0,
-            shift: t0,
-        })
+        let (f, shift) = r.forward(&self.bounds)?;
+        Some(Segment { origin: f.origin, tnear: f.tmin, tfar: f.tmax, shift })
     }
 }
 

@@ -5,13 +5,12 @@
 //! so); instances go through per-mesh trees and a top tree, with the rays moved into each
 //! instance's space here (obvhs' own TLAS traversal does not transform rays).
 
-mod error;
+mod accel;
 mod scene;
 mod tree;
 
 #[cfg(test)]
 mod tests;
 
-pub use error::ObvhsError;
-pub use scene::{BuildParams, Hit1, InstanceRef, MeshRef, ObvhsScene, Ray1};
+pub use scene::{Obvhs, ObvhsParams};
 pub use tree::{Kind, Preset, Tree};

@@ -5,47 +5,17 @@
 
 use std::time::Instant;
 
-use glam::{Affine3A, Vec3, Vec3A};
+use coherent_accel::{AccelError, BuildStats, Hit1, Instance, Ray1, Scene, TriAccel};
+use glam::{Affine3A, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::ray::Ray;
 use obvhs::triangle::Triangle;
 
 use crate::tree::{Kind, Preset, Tree};
-use crate::ObvhsError;
-
-/// One ray: origin, direction, and the segment `[tmin, tmax]` searched.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Ray1 {
-    pub org: [f32; 3],
-    pub dir: [f32; 3],
-    pub tmin: f32,
-    pub tmax: f32,
-}
-
-/// One hit: distance along the ray, barycentrics (of vertices 1 and 2), triangle, instance.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Hit1 {
-    pub t: f32,
-    pub u: f32,
-    pub v: f32,
-    pub prim: u32,
-    pub inst: u32,
-}
-
-impl Ray1 {
-    /// Rays that miss without traversal: non-finite origins or directions, a zero
-    /// direction, or an empty or NaN segment.
-    #[inline(always)]
-    pub fn is_valid(&self) -> bool {
-        let finite = self.org.iter().chain(&self.dir).all(|x| x.is_finite());
-        let nonzero = self.dir.iter().any(|&x| x != 0.0);
-        finite && nonzero && self.tmin >= 0.0 && self.tmin <= self.tmax
-    }
-}
 
 /// How the scene is built.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub struct BuildParams {
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ObvhsParams {
     pub kind: Kind,
     /// Preset of each mesh's tree (built once).
     pub mesh_preset: Preset,
@@ -53,89 +23,58 @@ pub struct BuildParams {
     pub top_preset: Preset,
 }
 
-/// One mesh: vertex positions and triangles (indices into `positions`).
-#[derive(Clone, Copy, Debug)]
-pub struct MeshRef<'a> {
-    pub positions: &'a [Vec3],
-    pub indices: &'a [[u32; 3]],
-}
-
-/// One placed copy of a mesh.
-#[derive(Clone, Copy, Debug)]
-pub struct InstanceRef {
-    pub mesh: usize,
-    pub world_from_object: Affine3A,
+impl Default for ObvhsParams {
+    /// CWBVH; obvhs' medium preset for the meshes, its fast one for the top tree (rebuilt
+    /// often, like the BSP's top level).
+    fn default() -> Self {
+        Self { kind: Kind::Cwbvh, mesh_preset: Preset::MediumBuild, top_preset: Preset::FastBuild }
+    }
 }
 
 struct Mesh {
-    /// Triangles in input order (the tree maps its leaves back to these indices).
+    /// The non-degenerate triangles (the tree maps its leaves back to these indices).
     tris: Vec<Triangle>,
+    /// Each triangle's index in the input mesh.
+    prims: Vec<u32>,
     tree: Tree,
     bounds: Aabb,
 }
 
-struct Instance {
+struct Placed {
     mesh: usize,
     world_from_object: Affine3A,
     object_from_world: Affine3A,
 }
 
-/// A built two-level obvhs scene.
-pub struct ObvhsScene {
+/// The obvhs accelerator: a built two-level obvhs scene.
+pub struct Obvhs {
     meshes: Vec<Mesh>,
-    instances: Vec<Instance>,
+    instances: Vec<Placed>,
     top: Tree,
     /// The instance of each primitive of the top tree.
     top_ids: Vec<u32>,
-    params: BuildParams,
-    build_ms: f64,
+    /// The world box of every instance, grown a little (rays with `tmin < 0` are clipped to
+    /// it: obvhs searches `t >= 0` only).
+    bounds: coherent_accel::Aabb,
+    params: ObvhsParams,
+    stats: BuildStats,
 }
 
-fn check_instance(i: usize, inst: &InstanceRef, meshes: usize) -> Result<(), ObvhsError> {
-    if inst.mesh >= meshes {
-        return Err(ObvhsError::InvalidInstance {
-            instance: i,
-            problem: format!("mesh {} out of range ({meshes} meshes)", inst.mesh),
-        });
-    }
-    let m = inst.world_from_object;
-    let det = m.matrix3.determinant();
-    if !m.matrix3.is_finite() || !m.translation.is_finite() || det == 0.0 || !det.is_finite() {
-        return Err(ObvhsError::InvalidInstance {
-            instance: i,
-            problem: format!("world_from_object is not finite and invertible ({m:?})"),
-        });
-    }
-    Ok(())
-}
-
-fn mesh_tris(m: usize, mesh: &MeshRef<'_>) -> Result<Vec<Triangle>, ObvhsError> {
-    if let Some(v) = mesh.positions.iter().position(|p| !p.is_finite()) {
-        return Err(ObvhsError::InvalidMesh {
-            mesh: m,
-            problem: format!("vertex {v} is not finite ({})", mesh.positions[v]),
-        });
-    }
-    let n = mesh.positions.len();
-    mesh.indices
-        .iter()
-        .enumerate()
-        .map(|(t, tri)| {
-            let p = |k: usize| {
-                mesh.positions.get(tri[k] as usize).map(|&p| Vec3A::from(p)).ok_or_else(|| {
-                    ObvhsError::InvalidMesh {
-                        mesh: m,
-                        problem: format!("triangle {t} has index {tri:?} out of range ({n} vertices)"),
-                    }
-                })
-            };
-            Ok(Triangle { v0: p(0)?, v1: p(1)?, v2: p(2)? })
+/// The non-degenerate triangles of a (validated) mesh, as obvhs triangles, with their
+/// indices; degenerate means what [`TriAccel`] rejects, as for every accelerator.
+fn mesh_tris(mesh: &coherent_accel::Mesh) -> (Vec<Triangle>, Vec<u32>) {
+    (0..mesh.indices.len())
+        .filter_map(|i| {
+            let p = mesh.triangle(i);
+            TriAccel::new(p, i as u32)?;
+            let [v0, v1, v2] = p.map(Vec3A::from);
+            Some((Triangle { v0, v1, v2 }, i as u32))
         })
-        .collect()
+        .unzip()
 }
 
 /// World bounds of `inst` (the eight corners of its mesh's box, transformed).
-fn world_box(mesh: &Mesh, inst: &Instance) -> Aabb {
+fn world_box(mesh: &Mesh, inst: &Placed) -> Aabb {
     let (lo, hi) = (mesh.bounds.min, mesh.bounds.max);
     let mut b = Aabb::empty();
     for c in 0..8 {
@@ -165,48 +104,53 @@ fn barycentrics(tri: &Triangle, ray: &Ray) -> (f32, f32) {
     (r.dot(e2) * inv_det, r.dot(e1) * inv_det)
 }
 
-impl ObvhsScene {
-    /// Builds every mesh's tree and the top tree. Fails with the mesh or instance at fault
-    /// for non-finite vertices, out-of-range indices, unknown meshes and singular transforms.
-    pub fn build(
-        meshes: &[MeshRef<'_>],
-        instances: &[InstanceRef],
-        params: BuildParams,
-    ) -> Result<Self, ObvhsError> {
-        for (i, inst) in instances.iter().enumerate() {
-            check_instance(i, inst, meshes.len())?;
-        }
+impl Obvhs {
+    /// Builds every mesh's tree and the top tree (the scene is validated first: errors name
+    /// the mesh or instance).
+    pub fn build_scene(scene: &Scene, params: &ObvhsParams) -> Result<Self, AccelError> {
+        let object_from_world = scene.validate()?;
         let start = Instant::now();
-        let meshes = meshes
+        let mut stats = BuildStats::default();
+        let meshes = scene
+            .meshes
             .iter()
-            .enumerate()
-            .map(|(m, mesh)| {
-                let tris = mesh_tris(m, mesh)?;
-                let mut bounds = Aabb::empty();
-                for t in &tris {
-                    bounds = bounds.union(&t.aabb());
-                }
+            .map(|mesh| {
+                let (tris, prims) = mesh_tris(mesh);
+                stats.triangles += tris.len();
+                stats.degenerate += mesh.indices.len() - tris.len();
+                let bounds = tris.iter().fold(Aabb::empty(), |b, t| b.union(&t.aabb()));
                 let tree = Tree::over_triangles(params.kind, &tris, params.mesh_preset);
-                Ok(Mesh { tris, tree, bounds })
-            })
-            .collect::<Result<Vec<_>, ObvhsError>>()?;
-        let instances = instances
-            .iter()
-            .map(|i| Instance {
-                mesh: i.mesh,
-                world_from_object: i.world_from_object,
-                object_from_world: i.world_from_object.inverse(),
+                Mesh { tris, prims, tree, bounds }
             })
             .collect();
-        let mut scene =
-            Self { meshes, instances, top: Tree::Empty, top_ids: Vec::new(), params, build_ms: 0.0 };
-        scene.build_top();
-        scene.build_ms = start.elapsed().as_secs_f64() * 1e3;
-        Ok(scene)
+        let mut o = Self {
+            meshes,
+            instances: Vec::new(),
+            top: Tree::Empty,
+            top_ids: Vec::new(),
+            bounds: coherent_accel::Aabb::EMPTY,
+            params: *params,
+            stats,
+        };
+        o.place(&scene.instances, object_from_world);
+        o.stats.build_seconds = start.elapsed().as_secs_f64();
+        o.stats.memory_bytes = o.memory();
+        Ok(o)
     }
 
-    fn build_top(&mut self) {
-        // Instances of empty meshes have no box and are never hit: they stay out of the tree.
+    /// Places the instances and builds the top tree over them.
+    fn place(&mut self, instances: &[Instance], object_from_world: Vec<Affine3A>) {
+        let start = Instant::now();
+        self.instances = instances
+            .iter()
+            .zip(object_from_world)
+            .map(|(i, inv)| Placed {
+                mesh: i.mesh,
+                world_from_object: i.world_from_object,
+                object_from_world: inv,
+            })
+            .collect();
+        // Instances of meshes without triangles are never hit: they stay out of the tree.
         self.top_ids.clear();
         let mut boxes = Vec::with_capacity(self.instances.len());
         for (i, inst) in self.instances.iter().enumerate() {
@@ -216,67 +160,66 @@ impl ObvhsScene {
                 boxes.push(world_box(mesh, inst));
             }
         }
+        let world = boxes.iter().fold(coherent_accel::Aabb::EMPTY, |w, b| {
+            w.union(coherent_accel::Aabb::new(b.min.into(), b.max.into()))
+        });
+        self.bounds = if world.is_empty() {
+            world
+        } else {
+            let margin = glam::Vec3::splat(1e-4 * world.extent().max_element() + 1e-6);
+            coherent_accel::Aabb::new(world.min - margin, world.max + margin)
+        };
         self.top = Tree::over_boxes(self.params.kind, &boxes, self.params.top_preset);
+        self.stats.instances = instances.len();
+        self.stats.top_build_seconds = start.elapsed().as_secs_f64();
     }
 
-    /// Moves instance `i` and rebuilds the top tree only (the meshes' trees are kept).
-    pub fn move_instance(
-        &mut self,
-        i: usize,
-        world_from_object: Affine3A,
-    ) -> Result<(), ObvhsError> {
-        check_instance(i, &InstanceRef { mesh: 0, world_from_object }, 1)?;
-        let Some(inst) = self.instances.get_mut(i) else {
-            return Err(ObvhsError::InvalidInstance {
-                instance: i,
-                problem: format!("no such instance ({} instances)", self.instances.len()),
-            });
-        };
-        let start = Instant::now();
-        inst.world_from_object = world_from_object;
-        inst.object_from_world = world_from_object.inverse();
-        self.build_top();
-        self.build_ms = start.elapsed().as_secs_f64() * 1e3;
+    /// Replaces the instances and rebuilds the top tree only.
+    pub fn replace_instances(&mut self, instances: &[Instance]) -> Result<(), AccelError> {
+        let inv = coherent_accel::scene::validate_instances(instances, self.meshes.len())?;
+        self.place(instances, inv);
+        self.stats.memory_bytes = self.memory();
         Ok(())
     }
 
-    /// Milliseconds of the last build (everything after `build`, the top tree after
-    /// `move_instance`).
-    pub fn build_ms(&self) -> f64 {
-        self.build_ms
-    }
-
-    /// Bytes of the trees and the triangles they index.
-    pub fn memory_bytes(&self) -> usize {
+    /// Bytes of the trees, the triangles they index and the instance data.
+    pub(crate) fn memory(&self) -> usize {
         let meshes: usize = self
             .meshes
             .iter()
-            .map(|m| m.tree.memory_bytes() + m.tris.len() * size_of::<Triangle>())
+            .map(|m| m.tree.memory_bytes() + m.tris.len() * (size_of::<Triangle>() + 4))
             .sum();
         meshes
             + self.top.memory_bytes()
             + self.top_ids.len() * 4
-            + self.instances.len() * size_of::<Instance>()
+            + self.instances.len() * size_of::<Placed>()
     }
 
-    pub fn params(&self) -> BuildParams {
+    pub(crate) fn stats_now(&self) -> BuildStats {
+        self.stats.clone()
+    }
+
+    pub fn params(&self) -> ObvhsParams {
         self.params
     }
 
     /// `r` in instance `inst`'s space, with the segment `[tmin, tmax]`.
     #[inline(always)]
-    fn object_ray(&self, inst: &Instance, world: &Ray, tmax: f32) -> Ray {
-        let o = inst.object_from_world.transform_point3a(world.origin);
-        let d = inst.object_from_world.transform_vector3a(world.direction);
-        Ray::new(o, d, world.tmin, tmax)
+    fn object_ray(&self, inst: &Placed, world: &Ray, tmax: f32) -> Ray {
+        // The interface's arithmetic (`Ray1::transformed`), so t agrees with the others.
+        let m = &inst.object_from_world;
+        let o = coherent_accel::transform_point1(m, world.origin.into());
+        let d = coherent_accel::transform_vector1(m, world.direction.into());
+        Ray::new(o.into(), d.into(), world.tmin, tmax)
     }
 
     /// First hit of one ray.
-    pub fn intersect1(&self, r: &Ray1) -> Option<Hit1> {
+    pub(crate) fn first_hit1(&self, r: &Ray1) -> Option<Hit1> {
         if !r.is_valid() {
             return None;
         }
-        let world = Ray::new(r.org.into(), r.dir.into(), r.tmin, r.tmax);
+        let (r, shift) = r.forward(&self.bounds)?;
+        let world = world_ray(&r);
         let mut best: Option<(u32, u32, Ray)> = None;
         let found = self.top.closest(world, |ray, i| {
             let i = self.top_ids[i as usize];
@@ -291,18 +234,21 @@ impl ObvhsScene {
                 _ => f32::INFINITY,
             }
         });
-        let ((_, t), (inst, prim, local)) = (found?, best?);
-        let tri = &self.meshes[self.instances[inst as usize].mesh].tris[prim as usize];
-        let (u, v) = barycentrics(tri, &local);
-        Some(Hit1 { t, u, v, prim, inst })
+        let ((_, t), (inst, k, local)) = (found?, best?);
+        let mesh = &self.meshes[self.instances[inst as usize].mesh];
+        let (u, v) = barycentrics(&mesh.tris[k as usize], &local);
+        Some(Hit1 { t: t + shift, u, v, prim: mesh.prims[k as usize], inst })
     }
 
     /// Whether anything lies on the ray's segment.
-    pub fn occluded1(&self, r: &Ray1) -> bool {
+    pub(crate) fn any_hit1(&self, r: &Ray1) -> bool {
         if !r.is_valid() {
             return false;
         }
-        let world = Ray::new(r.org.into(), r.dir.into(), r.tmin, r.tmax);
+        let Some((r, _)) = r.forward(&self.bounds) else {
+            return false;
+        };
+        let world = world_ray(&r);
         self.top.any(world, |ray, i| {
             let i = self.top_ids[i as usize];
             let inst = &self.instances[i as usize];
@@ -316,28 +262,37 @@ impl ObvhsScene {
         })
     }
 
-    /// Every hit on the ray's segment, each (triangle, instance) once, appended to `out`.
-    pub fn all_hits1(&self, r: &Ray1, out: &mut Vec<Hit1>) {
+    /// Every hit on the ray's segment, each (triangle, instance) once (a triangle split
+    /// into several leaves by the slow presets is met more than once).
+    pub(crate) fn every_hit1(&self, r: &Ray1, f: &mut impl FnMut(Hit1)) {
         if !r.is_valid() {
             return;
         }
-        let world = Ray::new(r.org.into(), r.dir.into(), r.tmin, r.tmax);
-        let first = out.len();
+        let Some((r, shift)) = r.forward(&self.bounds) else {
+            return;
+        };
+        let world = world_ray(&r);
+        let mut seen: Vec<(u32, u32)> = Vec::new();
         self.top.each(world, |ray, i| {
             let i = self.top_ids[i as usize];
             let inst = &self.instances[i as usize];
             let mesh = &self.meshes[inst.mesh];
             let local = self.object_ray(inst, ray, ray.tmax);
-            mesh.tree.each(local, |lr, prim| {
-                let tri = &mesh.tris[prim as usize];
+            mesh.tree.each(local, |lr, k| {
+                let tri = &mesh.tris[k as usize];
                 let t = hit_t(tri, lr);
-                if t.is_finite()
-                    && !out[first..].iter().any(|h| h.prim == prim && h.inst == i)
-                {
+                if t.is_finite() && !seen.contains(&(i, k)) {
+                    seen.push((i, k));
                     let (u, v) = barycentrics(tri, lr);
-                    out.push(Hit1 { t, u, v, prim, inst: i });
+                    f(Hit1 { t: t + shift, u, v, prim: mesh.prims[k as usize], inst: i });
                 }
             });
         });
     }
+}
+
+/// The world ray as obvhs takes it (valid rays only).
+#[inline(always)]
+fn world_ray(r: &Ray1) -> Ray {
+    Ray::new(r.origin.into(), r.dir.into(), r.tmin, r.tmax)
 }
