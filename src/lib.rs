@@ -7,3 +7,5 @@ pub use coherent_simd as simd;
 pub use coherent_embree as embree;
 #[cfg(feature = "obvhs")]
 pub use coherent_obvhs as obvhs;
+
+pub mod mesh_file;

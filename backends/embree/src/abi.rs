@@ -86,7 +86,10 @@ fn layouts_match_the_4_4_headers() {
     assert_eq!(core::mem::offset_of!(ffi::RTCRayHit, hit), 48);
     // RTCRayHitK: 12 K ray words, then the hit rows; instPrimID is row 12 + 8.
     assert_eq!(core::mem::offset_of!(RTCRayHitK<16>, Ng_x), 12 * 16 * 4);
-    assert_eq!(core::mem::offset_of!(RTCRayHitK<16>, instPrimID), 20 * 16 * 4);
+    assert_eq!(
+        core::mem::offset_of!(RTCRayHitK<16>, instPrimID),
+        20 * 16 * 4
+    );
     assert_eq!(core::mem::offset_of!(RTCRayHitK<8>, instPrimID), 20 * 8 * 4);
     assert_eq!(core::mem::offset_of!(RTCRayHitK<4>, instPrimID), 20 * 4 * 4);
     // Valid masks aligned to the packet (at least): 64 bytes serves 16 lanes.
@@ -110,7 +113,10 @@ struct Guarded<const K: usize> {
 
 fn guarded_packet<const K: usize>() {
     let scene = two_squares();
-    let mut g = Guarded::<K> { packet: RTCRayHitK::default(), guard: [SENTINEL; 64] };
+    let mut g = Guarded::<K> {
+        packet: RTCRayHitK::default(),
+        guard: [SENTINEL; 64],
+    };
     g.packet.instPrimID = [[SENTINEL; K]; 1];
     // Lanes spread along a line that crosses no triangle edge.
     let ray = |i: usize| up(0.05 + 0.9 * i as f32 / K as f32, 0.3137);
@@ -118,13 +124,19 @@ fn guarded_packet<const K: usize>() {
         set_lane(&mut g.packet, i, &ray(i));
     }
     scene.intersect_k(&mut g.packet, &valid_lanes::<K>(K));
-    assert!(g.guard.iter().all(|&w| w == SENTINEL), "{K}-wide: the library wrote past the hit");
+    assert!(
+        g.guard.iter().all(|&w| w == SENTINEL),
+        "{K}-wide: the library wrote past the hit"
+    );
     for i in 0..K {
         let h = lane_hit(&g.packet, i).expect("every lane hits the first square");
         assert_eq!(h.inst, 0, "lane {i}");
         assert!((h.t - 2.0).abs() < 1e-6, "lane {i}: t = {}", h.t);
         // The word the 4.2 struct lacked is written by the 4.4 library.
-        assert_ne!(g.packet.instPrimID[0][i], SENTINEL, "lane {i}: instPrimID not written");
+        assert_ne!(
+            g.packet.instPrimID[0][i], SENTINEL,
+            "lane {i}: instPrimID not written"
+        );
         // The packet answer is the single-ray answer.
         assert_eq!(scene.intersect1(&ray(i)), Some(h));
     }
@@ -153,7 +165,10 @@ fn single_ray_leaves_guard_words_intact() {
         guard: [u32; 16],
     }
     let scene = two_squares();
-    let mut g = Guarded1 { rh: ffi::RTCRayHit::default(), guard: [SENTINEL; 16] };
+    let mut g = Guarded1 {
+        rh: ffi::RTCRayHit::default(),
+        guard: [SENTINEL; 16],
+    };
     g.rh.ray = ffi::RTCRay {
         org_x: 0.5,
         org_y: 0.25,
@@ -194,7 +209,10 @@ fn first_hit_all_hits_and_occlusion() {
     all.sort_by(|a, b| a.t.total_cmp(&b.t));
     assert_eq!(all.iter().map(|h| h.inst).collect::<Vec<_>>(), [0, 1]);
     // Segment ends before the first square: no hit, not occluded.
-    let short = Ray1 { tmax: 1.5, ..up(0.75, 0.25) };
+    let short = Ray1 {
+        tmax: 1.5,
+        ..up(0.75, 0.25)
+    };
     assert_eq!(scene.intersect1(&short), None);
     assert!(!scene.occluded1(&short));
     assert!(scene.occluded1(&up(0.75, 0.25)));
@@ -206,14 +224,21 @@ fn all_hits_of_a_packet_go_to_their_lanes() {
     let mut p = RTCRayHitK::<8>::default();
     // Even lanes inside both squares, odd lanes inside the second only; lane 7 off.
     for i in 0..8 {
-        let r = if i % 2 == 0 { up(0.75, 0.1 * i as f32 + 0.05) } else { up(1.5, 1.2) };
+        let r = if i % 2 == 0 {
+            up(0.75, 0.1 * i as f32 + 0.05)
+        } else {
+            up(1.5, 1.2)
+        };
         set_lane(&mut p, i, &r);
     }
     let mut hits = Vec::new();
     scene.all_hits_k(&mut p, &valid_lanes::<8>(7), &mut hits);
     for lane in 0..8u32 {
-        let mut insts: Vec<u32> =
-            hits.iter().filter(|(l, _)| *l == lane).map(|(_, h)| h.inst).collect();
+        let mut insts: Vec<u32> = hits
+            .iter()
+            .filter(|(l, _)| *l == lane)
+            .map(|(_, h)| h.inst)
+            .collect();
         insts.sort();
         let want: &[u32] = match lane {
             7 => &[],
@@ -228,11 +253,27 @@ fn all_hits_of_a_packet_go_to_their_lanes() {
 fn invalid_rays_miss() {
     let scene = two_squares();
     for r in [
-        Ray1 { dir: Vec3::ZERO, ..up(0.5, 0.5) },
-        Ray1 { dir: Vec3::new(f32::NAN, 0.0, 1.0), ..up(0.5, 0.5) },
-        Ray1 { origin: Vec3::new(f32::INFINITY, 0.5, -1.0), ..up(0.5, 0.5) },
-        Ray1 { tmin: 5.0, tmax: 1.0, ..up(0.5, 0.5) },
-        Ray1 { tmax: f32::NAN, ..up(0.5, 0.5) },
+        Ray1 {
+            dir: Vec3::ZERO,
+            ..up(0.5, 0.5)
+        },
+        Ray1 {
+            dir: Vec3::new(f32::NAN, 0.0, 1.0),
+            ..up(0.5, 0.5)
+        },
+        Ray1 {
+            origin: Vec3::new(f32::INFINITY, 0.5, -1.0),
+            ..up(0.5, 0.5)
+        },
+        Ray1 {
+            tmin: 5.0,
+            tmax: 1.0,
+            ..up(0.5, 0.5)
+        },
+        Ray1 {
+            tmax: f32::NAN,
+            ..up(0.5, 0.5)
+        },
     ] {
         assert_eq!(scene.intersect1(&r), None, "{r:?}");
         assert!(!scene.occluded1(&r), "{r:?}");
@@ -255,14 +296,19 @@ fn moving_an_instance_rebuilds_the_top_level() {
     let mut bad = moved.instances.clone();
     bad[1].world_from_object = Affine3A::from_scale(Vec3::new(1.0, 0.0, 1.0));
     let err = scene.set_instances(&bad).unwrap_err();
-    assert!(matches!(err, AccelError::SingularTransform { instance: 1, .. }), "{err}");
+    assert!(
+        matches!(err, AccelError::SingularTransform { instance: 1, .. }),
+        "{err}"
+    );
 }
 
 #[test]
 fn negative_tmin_finds_hits_behind_the_origin() {
     let scene = two_squares();
     let r = Ray1::new(Vec3::new(0.75, 0.25, 5.0), Vec3::Z, -10.0, f32::INFINITY);
-    let h = scene.intersect1(&r).expect("the squares lie behind the origin, within tmin");
+    let h = scene
+        .intersect1(&r)
+        .expect("the squares lie behind the origin, within tmin");
     assert_eq!(h.inst, 0);
     assert!((h.t + 4.0).abs() < 1e-6, "{h:?}");
 }
@@ -283,25 +329,45 @@ fn degenerate_triangles_are_counted_and_never_hit() {
 
 #[test]
 fn missing_library_is_a_clear_error() {
-    let e = EmbreeError::NotFound { tried: "x: not found".into() };
+    let e = EmbreeError::NotFound {
+        tried: "x: not found".into(),
+    };
     let accel: AccelError = e.into();
     let msg = accel.to_string();
-    assert!(msg.contains("embree") && msg.contains("scripts/native.py"), "{msg}");
+    assert!(
+        msg.contains("embree") && msg.contains("scripts/native.py"),
+        "{msg}"
+    );
 }
 
 #[test]
 fn bad_input_names_the_mesh_or_instance() {
     let mut m = square();
     m.indices.push([0, 1, 7]);
-    let err = Embree::build(&Scene::single(m), &EmbreeParams::default()).err().unwrap();
-    assert!(matches!(err, AccelError::IndexOutOfRange { mesh: 0, .. }), "{err}");
+    let err = Embree::build(&Scene::single(m), &EmbreeParams::default())
+        .err()
+        .unwrap();
+    assert!(
+        matches!(err, AccelError::IndexOutOfRange { mesh: 0, .. }),
+        "{err}"
+    );
     let mut m = square();
     m.positions[2].y = f32::NAN;
-    let err = Embree::build(&Scene::single(m), &EmbreeParams::default()).err().unwrap();
-    assert!(matches!(err, AccelError::NonFinitePosition { mesh: 0, .. }), "{err}");
+    let err = Embree::build(&Scene::single(m), &EmbreeParams::default())
+        .err()
+        .unwrap();
+    assert!(
+        matches!(err, AccelError::NonFinitePosition { mesh: 0, .. }),
+        "{err}"
+    );
     let scene = Scene::new(vec![square()], vec![Instance::identity(3)]);
-    let err = Embree::build(&scene, &EmbreeParams::default()).err().unwrap();
-    assert!(matches!(err, AccelError::MeshOutOfRange { instance: 0, .. }), "{err}");
+    let err = Embree::build(&scene, &EmbreeParams::default())
+        .err()
+        .unwrap();
+    assert!(
+        matches!(err, AccelError::MeshOutOfRange { instance: 0, .. }),
+        "{err}"
+    );
 }
 
 #[test]
@@ -310,16 +376,25 @@ fn empty_scene_misses() {
     assert_eq!(scene.intersect1(&up(0.5, 0.5)), None);
     assert!(!scene.occluded1(&up(0.5, 0.5)));
     // A mesh placed by no instance.
-    let scene =
-        Embree::build(&Scene::new(vec![square()], vec![]), &EmbreeParams::default()).unwrap();
+    let scene = Embree::build(
+        &Scene::new(vec![square()], vec![]),
+        &EmbreeParams::default(),
+    )
+    .unwrap();
     assert_eq!(scene.intersect1(&up(0.5, 0.5)), None);
 }
 
 #[test]
 fn device_reports_what_the_comparison_relies_on() {
     let d = Device::new(Some(1)).unwrap();
-    assert!(!d.backface_culling(), "the library culls back faces; the other structures do not");
-    assert!(d.filter_functions(), "all-hits queries need filter functions");
+    assert!(
+        !d.backface_culling(),
+        "the library culls back faces; the other structures do not"
+    );
+    assert!(
+        d.filter_functions(),
+        "all-hits queries need filter functions"
+    );
     let scene = two_squares();
     assert!(scene.memory_bytes() > 0);
     eprintln!(

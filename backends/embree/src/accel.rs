@@ -29,7 +29,10 @@ impl Accel for Embree {
     }
 
     fn stats(&self) -> BuildStats {
-        BuildStats { memory_bytes: self.memory_bytes(), ..self.stats.clone() }
+        BuildStats {
+            memory_bytes: self.memory_bytes(),
+            ..self.stats.clone()
+        }
     }
 
     fn intersect1(&self, ray: &Ray1) -> Option<Hit1> {
@@ -52,7 +55,11 @@ impl Accel for Embree {
             16 => self.intersect_packet::<L, 16>(l, rays, active),
             _ => Hits::from_fn(l, |i| {
                 use coherent_simd::SimdMask;
-                if active.lane(i) { self.first_hit1(&rays.lane(i)) } else { None }
+                if active.lane(i) {
+                    self.first_hit1(&rays.lane(i))
+                } else {
+                    None
+                }
             }),
         }
     }

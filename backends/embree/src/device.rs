@@ -45,7 +45,10 @@ impl Device {
         if raw.is_null() {
             // SAFETY: a null device asks for the error of the last device creation.
             let code = unsafe { (api.get_device_error)(core::ptr::null_mut()) };
-            return Err(EmbreeError::Call { what: "create a device", code: error_name(api, code) });
+            return Err(EmbreeError::Call {
+                what: "create a device",
+                code: error_name(api, code),
+            });
         }
         let memory = Box::new(AtomicIsize::new(0));
         let device = Self { api, raw, memory };
@@ -111,7 +114,10 @@ impl Device {
         if code == ffi::ERROR_NONE {
             Ok(())
         } else {
-            Err(EmbreeError::Call { what, code: error_name(self.api, code) })
+            Err(EmbreeError::Call {
+                what,
+                code: error_name(self.api, code),
+            })
         }
     }
 }
@@ -123,7 +129,9 @@ fn error_name(api: &Api, code: core::ffi::c_int) -> String {
         format!("error {code}")
     } else {
         // SAFETY: non-null static NUL-terminated string from the library.
-        unsafe { CStr::from_ptr(name) }.to_string_lossy().into_owned()
+        unsafe { CStr::from_ptr(name) }
+            .to_string_lossy()
+            .into_owned()
     }
 }
 

@@ -28,7 +28,10 @@ impl From<EmbreeError> for coherent_accel::AccelError {
     fn from(e: EmbreeError) -> Self {
         match e {
             EmbreeError::Scene(e) => e,
-            other => Self::Unavailable { accel: "embree", reason: other.to_string() },
+            other => Self::Unavailable {
+                accel: "embree",
+                reason: other.to_string(),
+            },
         }
     }
 }

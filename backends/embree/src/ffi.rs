@@ -181,7 +181,10 @@ pub struct RTCRayQueryContext {
 impl Default for RTCRayQueryContext {
     /// `rtcInitRayQueryContext` (inline in the header).
     fn default() -> Self {
-        Self { instID: [INVALID_ID], instPrimID: [INVALID_ID] }
+        Self {
+            instID: [INVALID_ID],
+            instPrimID: [INVALID_ID],
+        }
     }
 }
 
@@ -198,7 +201,8 @@ pub struct RTCFilterFunctionNArguments {
     pub N: c_uint,
 }
 
-pub type RTCFilterFunctionN = Option<unsafe extern "C" fn(args: *const RTCFilterFunctionNArguments)>;
+pub type RTCFilterFunctionN =
+    Option<unsafe extern "C" fn(args: *const RTCFilterFunctionNArguments)>;
 
 /// `struct RTCIntersectArguments`, set by hand as `rtcInitIntersectArguments` does. The last
 /// field exists only in libraries built with `RTC_MIN_WIDTH`; kept (as 0) so the struct is

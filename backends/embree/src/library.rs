@@ -56,5 +56,7 @@ fn load() -> Result<Api, EmbreeError> {
             Err(e) => tried.push(format!("{}: {e}", path.display())),
         }
     }
-    Err(EmbreeError::NotFound { tried: tried.join("; ") })
+    Err(EmbreeError::NotFound {
+        tried: tried.join("; "),
+    })
 }

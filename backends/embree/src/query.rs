@@ -53,7 +53,10 @@ unsafe extern "C" fn record_and_reject(args: *const ffi::RTCFilterFunctionNArgum
                 prim: *(word(args.hit, 5, i) as *const u32),
                 inst: *(word(args.hit, 7, i) as *const u32),
             };
-            if !hits.iter().any(|&(l, o)| l == lane && o.prim == h.prim && o.inst == h.inst) {
+            if !hits
+                .iter()
+                .any(|&(l, o)| l == lane && o.prim == h.prim && o.inst == h.inst)
+            {
                 hits.push((lane, h));
             }
             *valid = 0;
@@ -62,7 +65,11 @@ unsafe extern "C" fn record_and_reject(args: *const ffi::RTCFilterFunctionNArgum
 }
 
 fn flags(coherent: bool) -> c_int {
-    if coherent { ffi::RAY_QUERY_FLAG_COHERENT } else { ffi::RAY_QUERY_FLAG_INCOHERENT }
+    if coherent {
+        ffi::RAY_QUERY_FLAG_COHERENT
+    } else {
+        ffi::RAY_QUERY_FLAG_INCOHERENT
+    }
 }
 
 /// A ray as Embree is asked it: Embree searches `t >= 0` only, so a ray with `tmin < 0` is
@@ -80,7 +87,12 @@ impl Embree {
     #[inline(always)]
     fn segment(&self, r: &Ray1) -> Option<Segment> {
         let (f, shift) = r.forward(&self.bounds)?;
-        Some(Segment { origin: f.origin, tnear: f.tmin, tfar: f.tmax, shift })
+        Some(Segment {
+            origin: f.origin,
+            tnear: f.tmin,
+            tfar: f.tmax,
+            shift,
+        })
     }
 }
 
@@ -102,7 +114,11 @@ fn ray_hit1(r: &Ray1, s: &Segment) -> ffi::RTCRayHit {
             id: 0,
             flags: 0,
         },
-        hit: ffi::RTCHit { geomID: ffi::INVALID_ID, instID: [ffi::INVALID_ID], ..Default::default() },
+        hit: ffi::RTCHit {
+            geomID: ffi::INVALID_ID,
+            instID: [ffi::INVALID_ID],
+            ..Default::default()
+        },
     }
 }
 
@@ -146,7 +162,9 @@ fn packet<L: Lanes, const K: usize>(
         }
         shift = Some(s);
     }
-    let valid = ValidK(core::array::from_fn(|i| if bits >> i & 1 == 1 { -1 } else { 0 }));
+    let valid = ValidK(core::array::from_fn(|i| {
+        if bits >> i & 1 == 1 { -1 } else { 0 }
+    }));
     (p, valid, bits, shift)
 }
 
@@ -201,7 +219,10 @@ impl Embree {
             return;
         };
         let mut hits = Vec::new();
-        let mut ctx = AllHitsContext { base: RTCRayQueryContext::default(), hits: &mut hits };
+        let mut ctx = AllHitsContext {
+            base: RTCRayQueryContext::default(),
+            hits: &mut hits,
+        };
         let mut args = ffi::RTCIntersectArguments::new(
             ffi::RAY_QUERY_FLAG_INCOHERENT | ffi::RAY_QUERY_FLAG_INVOKE_ARGUMENT_FILTER,
         );
@@ -210,7 +231,12 @@ impl Embree {
         let mut rh = ray_hit1(r, &seg);
         // SAFETY: as in `first_hit1`; the context outlives the call.
         unsafe { (self.device.api.intersect1)(self.top, &mut rh, &mut args) };
-        hits.into_iter().for_each(|(_, h)| f(Hit1 { t: h.t + seg.shift, ..h }));
+        hits.into_iter().for_each(|(_, h)| {
+            f(Hit1 {
+                t: h.t + seg.shift,
+                ..h
+            })
+        });
     }
 
     /// First hits of a K-wide packet (K = 4, 8, 16) for the lanes on in `valid`; results
@@ -223,7 +249,12 @@ impl Embree {
 
     /// Occlusion of a K-wide packet (occluded lanes get `tfar = -inf`).
     pub fn occluded_k<const K: usize>(&self, p: &mut RTCRayHitK<K>, valid: &ValidK<K>) {
-        const { assert!(K == 4 || K == 8 || K == 16, "Embree has 4, 8 and 16-wide packets") };
+        const {
+            assert!(
+                K == 4 || K == 8 || K == 16,
+                "Embree has 4, 8 and 16-wide packets"
+            )
+        };
         let mut args = ffi::RTCOccludedArguments::new(flags(self.params.coherent));
         let api = self.device.api;
         let v = valid.0.as_ptr();
@@ -248,7 +279,10 @@ impl Embree {
         valid: &ValidK<K>,
         hits: &mut Vec<(u32, Hit1)>,
     ) {
-        let mut ctx = AllHitsContext { base: RTCRayQueryContext::default(), hits };
+        let mut ctx = AllHitsContext {
+            base: RTCRayQueryContext::default(),
+            hits,
+        };
         let mut args = ffi::RTCIntersectArguments::new(
             flags(self.params.coherent) | ffi::RAY_QUERY_FLAG_INVOKE_ARGUMENT_FILTER,
         );
@@ -263,7 +297,12 @@ impl Embree {
         valid: &ValidK<K>,
         args: &mut ffi::RTCIntersectArguments,
     ) {
-        const { assert!(K == 4 || K == 8 || K == 16, "Embree has 4, 8 and 16-wide packets") };
+        const {
+            assert!(
+                K == 4 || K == 8 || K == 16,
+                "Embree has 4, 8 and 16-wide packets"
+            )
+        };
         let api = self.device.api;
         let v = valid.0.as_ptr();
         let p = (p as *mut RTCRayHitK<K>).cast();
@@ -340,7 +379,13 @@ impl Embree {
         self.all_hits_k(&mut p, &valid, &mut hits);
         let s = shift.unwrap_or([0.0; K]);
         hits.into_iter().for_each(|(lane, h)| {
-            f(lane as usize, Hit1 { t: h.t + s[lane as usize], ..h })
+            f(
+                lane as usize,
+                Hit1 {
+                    t: h.t + s[lane as usize],
+                    ..h
+                },
+            )
         });
     }
 }

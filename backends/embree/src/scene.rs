@@ -112,7 +112,12 @@ unsafe impl Sync for Embree {}
 /// `world_from_object` as Embree's `FLOAT3X4_COLUMN_MAJOR`: the three axes, then the
 /// translation.
 fn column_major(m: &Affine3A) -> [f32; 12] {
-    let (x, y, z, t) = (m.matrix3.x_axis, m.matrix3.y_axis, m.matrix3.z_axis, m.translation);
+    let (x, y, z, t) = (
+        m.matrix3.x_axis,
+        m.matrix3.y_axis,
+        m.matrix3.z_axis,
+        m.translation,
+    );
     [x.x, x.y, x.z, y.x, y.y, y.z, z.x, z.y, z.z, t.x, t.y, t.z]
 }
 
@@ -151,7 +156,11 @@ impl Embree {
 
     fn scene_flags(&self) -> core::ffi::c_int {
         ffi::SCENE_FLAG_FILTER_FUNCTION_IN_ARGUMENTS
-            | if self.params.robust { ffi::SCENE_FLAG_ROBUST } else { ffi::SCENE_FLAG_NONE }
+            | if self.params.robust {
+                ffi::SCENE_FLAG_ROBUST
+            } else {
+                ffi::SCENE_FLAG_NONE
+            }
     }
 
     fn new_scene(&self, quality: BuildQuality) -> Result<RTCScene, EmbreeError> {
@@ -240,8 +249,7 @@ impl Embree {
         self.top = self.new_scene(self.params.top_quality)?;
         for (i, inst) in instances.iter().enumerate() {
             // SAFETY: a live device; instance is a geometry type of every Embree 4.
-            let geom =
-                unsafe { (api.new_geometry)(self.device.raw, ffi::GEOMETRY_TYPE_INSTANCE) };
+            let geom = unsafe { (api.new_geometry)(self.device.raw, ffi::GEOMETRY_TYPE_INSTANCE) };
             self.device.check("create an instance")?;
             let xfm = column_major(&inst.world_from_object);
             // SAFETY: live handles; Embree copies the transform; the top scene holds the

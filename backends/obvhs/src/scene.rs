@@ -27,7 +27,11 @@ impl Default for ObvhsParams {
     /// CWBVH; obvhs' medium preset for the meshes, its fast one for the top tree (rebuilt
     /// often, like the BSP's top level).
     fn default() -> Self {
-        Self { kind: Kind::Cwbvh, mesh_preset: Preset::MediumBuild, top_preset: Preset::FastBuild }
+        Self {
+            kind: Kind::Cwbvh,
+            mesh_preset: Preset::MediumBuild,
+            top_preset: Preset::FastBuild,
+        }
     }
 }
 
@@ -120,7 +124,12 @@ impl Obvhs {
                 stats.degenerate += mesh.indices.len() - tris.len();
                 let bounds = tris.iter().fold(Aabb::empty(), |b, t| b.union(&t.aabb()));
                 let tree = Tree::over_triangles(params.kind, &tris, params.mesh_preset);
-                Mesh { tris, prims, tree, bounds }
+                Mesh {
+                    tris,
+                    prims,
+                    tree,
+                    bounds,
+                }
             })
             .collect();
         let mut o = Self {
@@ -210,7 +219,7 @@ impl Obvhs {
         let m = &inst.object_from_world;
         let o = coherent_accel::transform_point1(m, world.origin.into());
         let d = coherent_accel::transform_vector1(m, world.direction.into());
-        Ray::new(o.into(), d.into(), world.tmin, tmax)
+        Ray::new(o.into(), positive_zeros(d.into()), world.tmin, tmax)
     }
 
     /// First hit of one ray.
@@ -226,7 +235,10 @@ impl Obvhs {
             let inst = &self.instances[i as usize];
             let mesh = &self.meshes[inst.mesh];
             let local = self.object_ray(inst, ray, ray.tmax);
-            match mesh.tree.closest(local, |lr, t| hit_t(&mesh.tris[t as usize], lr)) {
+            match mesh
+                .tree
+                .closest(local, |lr, t| hit_t(&mesh.tris[t as usize], lr))
+            {
                 Some((prim, t)) if t < ray.tmax => {
                     best = Some((i, prim, local));
                     t
@@ -237,7 +249,13 @@ impl Obvhs {
         let ((_, t), (inst, k, local)) = (found?, best?);
         let mesh = &self.meshes[self.instances[inst as usize].mesh];
         let (u, v) = barycentrics(&mesh.tris[k as usize], &local);
-        Some(Hit1 { t: t + shift, u, v, prim: mesh.prims[k as usize], inst })
+        Some(Hit1 {
+            t: t + shift,
+            u,
+            v,
+            prim: mesh.prims[k as usize],
+            inst,
+        })
     }
 
     /// Whether anything lies on the ray's segment.
@@ -254,7 +272,10 @@ impl Obvhs {
             let inst = &self.instances[i as usize];
             let mesh = &self.meshes[inst.mesh];
             let local = self.object_ray(inst, ray, ray.tmax);
-            if mesh.tree.any(local, |lr, t| hit_t(&mesh.tris[t as usize], lr)) {
+            if mesh
+                .tree
+                .any(local, |lr, t| hit_t(&mesh.tris[t as usize], lr))
+            {
                 0.0
             } else {
                 f32::INFINITY
@@ -284,7 +305,13 @@ impl Obvhs {
                 if t.is_finite() && !seen.contains(&(i, k)) {
                     seen.push((i, k));
                     let (u, v) = barycentrics(tri, lr);
-                    f(Hit1 { t: t + shift, u, v, prim: mesh.prims[k as usize], inst: i });
+                    f(Hit1 {
+                        t: t + shift,
+                        u,
+                        v,
+                        prim: mesh.prims[k as usize],
+                        inst: i,
+                    });
                 }
             });
         });
@@ -294,5 +321,18 @@ impl Obvhs {
 /// The world ray as obvhs takes it (valid rays only).
 #[inline(always)]
 fn world_ray(r: &Ray1) -> Ray {
-    Ray::new(r.origin.into(), r.dir.into(), r.tmin, r.tmax)
+    Ray::new(
+        r.origin.into(),
+        positive_zeros(r.dir.into()),
+        r.tmin,
+        r.tmax,
+    )
+}
+
+/// `-0.0` components made `+0.0`: obvhs 0.4's CWBVH traversal misses every hit of a ray
+/// whose direction has a `-0.0` component (its octant and its inverse direction then
+/// disagree; found by `tests/accel_equivalence.rs`).
+#[inline(always)]
+fn positive_zeros(d: Vec3A) -> Vec3A {
+    d + Vec3A::ZERO
 }

@@ -37,7 +37,10 @@ fn two_squares_scene() -> Scene {
 }
 
 fn params(kind: Kind) -> ObvhsParams {
-    ObvhsParams { kind, ..Default::default() }
+    ObvhsParams {
+        kind,
+        ..Default::default()
+    }
 }
 
 fn up(x: f32, y: f32) -> Ray1 {
@@ -53,7 +56,10 @@ fn first_hit_all_hits_and_occlusion() {
         assert!((h.t - 2.0).abs() < 1e-6);
         // The hit point is (1 - u - v) p0 + u p1 + v p2 of triangle [0, 1, 2].
         let p = Vec3::new(1.0, 0.0, 0.0) * h.u + Vec3::new(1.0, 1.0, 0.0) * h.v;
-        assert!((p - Vec3::new(0.75, 0.25, 0.0)).length() < 1e-6, "{kind:?}: {h:?}");
+        assert!(
+            (p - Vec3::new(0.75, 0.25, 0.0)).length() < 1e-6,
+            "{kind:?}: {h:?}"
+        );
         let h = scene.intersect1(&up(1.5, 1.2)).unwrap();
         assert_eq!(h.inst, 1);
         assert!((h.t - 3.0).abs() < 1e-6);
@@ -61,8 +67,15 @@ fn first_hit_all_hits_and_occlusion() {
         let mut all = Vec::new();
         scene.intersect_all1(&up(0.75, 0.25), &mut |h| all.push(h));
         all.sort_by(|a, b| a.t.total_cmp(&b.t));
-        assert_eq!(all.iter().map(|h| h.inst).collect::<Vec<_>>(), [0, 1], "{kind:?}");
-        let short = Ray1 { tmax: 1.5, ..up(0.75, 0.25) };
+        assert_eq!(
+            all.iter().map(|h| h.inst).collect::<Vec<_>>(),
+            [0, 1],
+            "{kind:?}"
+        );
+        let short = Ray1 {
+            tmax: 1.5,
+            ..up(0.75, 0.25)
+        };
         assert_eq!(scene.intersect1(&short), None);
         assert!(!scene.occluded1(&short));
         assert!(scene.occluded1(&up(0.75, 0.25)));
@@ -73,9 +86,17 @@ fn first_hit_all_hits_and_occlusion() {
 fn every_preset_builds_and_answers() {
     for kind in Kind::ALL {
         for preset in Preset::ALL {
-            let p = ObvhsParams { kind, mesh_preset: preset, top_preset: preset };
+            let p = ObvhsParams {
+                kind,
+                mesh_preset: preset,
+                top_preset: preset,
+            };
             let scene = Obvhs::build(&two_squares_scene(), &p).unwrap();
-            assert_eq!(scene.intersect1(&up(0.75, 0.25)).map(|h| h.inst), Some(0), "{p:?}");
+            assert_eq!(
+                scene.intersect1(&up(0.75, 0.25)).map(|h| h.inst),
+                Some(0),
+                "{p:?}"
+            );
             assert!(scene.memory_bytes() > 0);
         }
     }
@@ -85,11 +106,27 @@ fn every_preset_builds_and_answers() {
 fn invalid_rays_miss() {
     let scene = Obvhs::build(&two_squares_scene(), &ObvhsParams::default()).unwrap();
     for r in [
-        Ray1 { dir: Vec3::ZERO, ..up(0.5, 0.5) },
-        Ray1 { dir: Vec3::new(f32::NAN, 0.0, 1.0), ..up(0.5, 0.5) },
-        Ray1 { origin: Vec3::new(f32::INFINITY, 0.5, -1.0), ..up(0.5, 0.5) },
-        Ray1 { tmin: 5.0, tmax: 1.0, ..up(0.5, 0.5) },
-        Ray1 { tmax: f32::NAN, ..up(0.5, 0.5) },
+        Ray1 {
+            dir: Vec3::ZERO,
+            ..up(0.5, 0.5)
+        },
+        Ray1 {
+            dir: Vec3::new(f32::NAN, 0.0, 1.0),
+            ..up(0.5, 0.5)
+        },
+        Ray1 {
+            origin: Vec3::new(f32::INFINITY, 0.5, -1.0),
+            ..up(0.5, 0.5)
+        },
+        Ray1 {
+            tmin: 5.0,
+            tmax: 1.0,
+            ..up(0.5, 0.5)
+        },
+        Ray1 {
+            tmax: f32::NAN,
+            ..up(0.5, 0.5)
+        },
     ] {
         assert_eq!(scene.intersect1(&r), None, "{r:?}");
         assert!(!scene.occluded1(&r), "{r:?}");
@@ -110,8 +147,7 @@ fn moving_instances_rebuilds_the_top_level() {
     for kind in Kind::ALL {
         let mut scene = Obvhs::build(&two_squares_scene(), &params(kind)).unwrap();
         let mut moved = two_squares_scene();
-        moved.instances[0].world_from_object =
-            Affine3A::from_translation(Vec3::new(5.0, 0.0, 1.0));
+        moved.instances[0].world_from_object = Affine3A::from_translation(Vec3::new(5.0, 0.0, 1.0));
         scene.set_instances(&moved.instances).unwrap();
         assert_eq!(scene.intersect1(&up(0.75, 0.25)).map(|h| h.inst), Some(1));
         assert_eq!(scene.intersect1(&up(5.75, 0.25)).map(|h| h.inst), Some(0));
@@ -120,7 +156,10 @@ fn moving_instances_rebuilds_the_top_level() {
         let mut bad = moved.instances.clone();
         bad[1].world_from_object = Affine3A::from_scale(Vec3::new(1.0, 0.0, 1.0));
         let err = scene.set_instances(&bad).unwrap_err();
-        assert!(matches!(err, AccelError::SingularTransform { instance: 1, .. }), "{err}");
+        assert!(
+            matches!(err, AccelError::SingularTransform { instance: 1, .. }),
+            "{err}"
+        );
     }
 }
 
@@ -142,11 +181,19 @@ fn degenerate_triangles_are_counted_and_never_hit() {
 fn bad_input_names_the_mesh_or_instance() {
     let mut m = square();
     m.indices.push([0, 1, 7]);
-    let err = Obvhs::build(&Scene::single(m), &ObvhsParams::default()).err().unwrap();
-    assert!(matches!(err, AccelError::IndexOutOfRange { mesh: 0, .. }), "{err}");
+    let err = Obvhs::build(&Scene::single(m), &ObvhsParams::default())
+        .err()
+        .unwrap();
+    assert!(
+        matches!(err, AccelError::IndexOutOfRange { mesh: 0, .. }),
+        "{err}"
+    );
     let scene = Scene::new(vec![square()], vec![Instance::identity(3)]);
     let err = Obvhs::build(&scene, &ObvhsParams::default()).err().unwrap();
-    assert!(matches!(err, AccelError::MeshOutOfRange { instance: 0, .. }), "{err}");
+    assert!(
+        matches!(err, AccelError::MeshOutOfRange { instance: 0, .. }),
+        "{err}"
+    );
 }
 
 #[test]

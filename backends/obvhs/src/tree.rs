@@ -90,9 +90,14 @@ impl Preset {
 impl core::str::FromStr for Preset {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        Self::ALL.into_iter().find(|p| p.name() == s).ok_or_else(|| {
-            format!("unknown obvhs preset {s:?} (fastest, very_fast, fast, medium, slow, very_slow)")
-        })
+        Self::ALL
+            .into_iter()
+            .find(|p| p.name() == s)
+            .ok_or_else(|| {
+                format!(
+                    "unknown obvhs preset {s:?} (fastest, very_fast, fast, medium, slow, very_slow)"
+                )
+            })
     }
 }
 
@@ -113,9 +118,11 @@ impl Tree {
         }
         let mut t = Duration::ZERO;
         match kind {
-            Kind::Bvh2 => {
-                Self::Bvh2(obvhs::bvh2::builder::build_bvh2_from_tris(tris, preset.params(), &mut t))
-            }
+            Kind::Bvh2 => Self::Bvh2(obvhs::bvh2::builder::build_bvh2_from_tris(
+                tris,
+                preset.params(),
+                &mut t,
+            )),
             Kind::Cwbvh => Self::Cwbvh(obvhs::cwbvh::builder::build_cwbvh_from_tris(
                 tris,
                 preset.params(),
@@ -131,10 +138,16 @@ impl Tree {
         }
         let mut t = Duration::ZERO;
         match kind {
-            Kind::Bvh2 => Self::Bvh2(obvhs::bvh2::builder::build_bvh2(boxes, preset.params(), &mut t)),
-            Kind::Cwbvh => {
-                Self::Cwbvh(obvhs::cwbvh::builder::build_cwbvh(boxes, preset.params(), &mut t))
-            }
+            Kind::Bvh2 => Self::Bvh2(obvhs::bvh2::builder::build_bvh2(
+                boxes,
+                preset.params(),
+                &mut t,
+            )),
+            Kind::Cwbvh => Self::Cwbvh(obvhs::cwbvh::builder::build_cwbvh(
+                boxes,
+                preset.params(),
+                &mut t,
+            )),
         }
     }
 
