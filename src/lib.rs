@@ -8,4 +8,6 @@ pub use coherent_embree as embree;
 #[cfg(feature = "obvhs")]
 pub use coherent_obvhs as obvhs;
 
+pub mod kernels;
+pub mod machine;
 pub mod mesh_file;

@@ -4,17 +4,11 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-/// `values[k] = f(x0 + k * step)` for k in 0..=n, written as value and slope tables of n entries.
+/// `name[k] = f(k)` for k in 0..=n: the n + 1 nodes of n interpolation intervals.
 fn table(out: &mut String, name: &str, n: usize, f: impl Fn(usize) -> f64) {
-    let v: Vec<f64> = (0..=n).map(&f).collect();
-    writeln!(out, "pub(crate) static {name}_VALUE: [f32; {n}] = [").unwrap();
-    for x in &v[..n] {
-        writeln!(out, "    {:?},", *x as f32).unwrap();
-    }
-    writeln!(out, "];").unwrap();
-    writeln!(out, "pub(crate) static {name}_SLOPE: [f32; {n}] = [").unwrap();
-    for k in 0..n {
-        writeln!(out, "    {:?},", (v[k + 1] - v[k]) as f32).unwrap();
+    writeln!(out, "pub(crate) static {name}: [f32; {}] = [", n + 1).unwrap();
+    for k in 0..=n {
+        writeln!(out, "    {:?},", f(k) as f32).unwrap();
     }
     writeln!(out, "];").unwrap();
 }

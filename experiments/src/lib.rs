@@ -1,1 +1,76 @@
-//! The experiments of `reproduce`.
+//! `coherent-experiments`: the experiments of `reproduce`, one module per paper table or
+//! comparison (paper section 7), and the infrastructure they share: the run context
+//! ([`Ctx`]), CSV tables, timing, plots and the generated `README.md`.
+//!
+//! Adding an experiment: write a module exporting `pub const EXPERIMENT: Experiment`
+//! (see [`experiment`]), declare it below and put it in [`EXPERIMENTS`] in place of its
+//! `Experiment::planned` line.
+
+pub mod cli;
+pub mod ctx;
+pub mod experiment;
+pub mod plot;
+pub mod readme;
+pub mod table;
+pub mod timing;
+
+pub use ctx::Ctx;
+pub use experiment::{Experiment, Status};
+
+// The experiments, one module each.
+pub mod kernels;
+
+/// Every experiment, in the order `reproduce` runs them and the README lists them. The
+/// names are the results contract (`--only` takes them).
+pub const EXPERIMENTS: &[Experiment] = &[
+    kernels::EXPERIMENT,
+    Experiment::planned(
+        "accel",
+        "traversal speed, build time and memory per accel, ray kind and packet width",
+        "section 3 (two-level BSP)",
+        &["accel.csv"],
+        Some(3),
+    ),
+    Experiment::planned(
+        "table1",
+        "anisotropic tabulated BDF evaluations per backend",
+        "Table 1 (section 4.2)",
+        &["table1_bdf.csv"],
+        Some(5),
+    ),
+    Experiment::planned(
+        "table2",
+        "light source evaluation per light type and backend",
+        "Table 2 (section 5)",
+        &["table2_lights.csv"],
+        None,
+    ),
+    Experiment::planned(
+        "table3",
+        "rendering the test scenes per backend and accel",
+        "Table 3 (section 7)",
+        &["table3_scenes.csv"],
+        None,
+    ),
+    Experiment::planned(
+        "table4",
+        "the characteristics of the test scenes",
+        "Table 4 (section 7)",
+        &["table4_scenes.csv"],
+        None,
+    ),
+    Experiment::planned(
+        "table5",
+        "rendering with 1, 2, ... threads",
+        "Table 5 (section 7)",
+        &["table5_threads.csv"],
+        None,
+    ),
+    Experiment::planned(
+        "aa",
+        "adaptive anti-aliasing with two screen matrices: time against accuracy",
+        "section 6.2",
+        &[],
+        None,
+    ),
+];

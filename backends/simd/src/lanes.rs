@@ -15,7 +15,9 @@
 //! - `to_i32` truncates toward zero; NaN and values outside the i32 range give `i32::MIN`
 //!   (x86's "integer indefinite").
 //! - `rsqrt` and `recip` are approximate where the hardware is: relative error at most
-//!   [`RSQRT_REL_ERROR`] / [`RECIP_REL_ERROR`] (the scalar backend is exact).
+//!   [`RSQRT_REL_ERROR`] / [`RECIP_REL_ERROR`] (the scalar backend is exact) for normal
+//!   inputs and results; the x86 estimates treat denormal inputs as zero (giving inf) and
+//!   flush denormal results to zero.
 //! - `mul_add(a, b, c)` is fused on backends with FMA and two roundings elsewhere: either
 //!   result is accepted (`tests/lanes.rs` checks it is one of the two).
 //! - Integer `+ - *` wrap; `>>` is arithmetic, [`SimdI32::shr_logical`] logical; shift counts
@@ -65,6 +67,14 @@ pub trait Lanes: Copy + Debug + Send + Sync + 'static {
     fn gather(self, table: &[f32], idx: Self::I32s) -> Self::F32s;
     /// `table[idx[i]]` per lane, as bits. Panics if any lane's index is outside `table`.
     fn gather_u32(self, table: &[u32], idx: Self::I32s) -> Self::I32s;
+    /// `(table[idx[i]], table[idx[i] + 1])` per lane: the two ends of an interpolation
+    /// interval. Backends with 64-bit gathers load each pair at once (half the gathered
+    /// elements). Panics unless every `idx[i] + 1` lies inside `table`.
+    #[inline(always)]
+    fn gather2(self, table: &[f32], idx: Self::I32s) -> (Self::F32s, Self::F32s) {
+        let lo = self.gather(&table[..table.len().saturating_sub(1)], idx);
+        (lo, self.gather(&table[1..], idx))
+    }
 
     /// Lanes from a function of the lane index (packing, tests; not for hot loops).
     #[inline(always)]

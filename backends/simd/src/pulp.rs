@@ -183,6 +183,34 @@ impl Lanes for Pulp8 {
         // SAFETY: every index was checked to lie in `0..table.len()`.
         I32x8(unsafe { _mm256_i32gather_epi32::<4>(table.as_ptr().cast(), idx.0) })
     }
+    #[inline(always)]
+    fn gather2(self, table: &[f32], idx: I32x8) -> (F32x8, F32x8) {
+        let n = table.len().saturating_sub(1);
+        let ok = in_range8(idx, n);
+        if !ok {
+            gather_check(ok, &idx.to_array(), n);
+        }
+        // SAFETY: every `idx + 1` was checked to lie inside `table`; each 64-bit element is
+        // the pair (table[i], table[i + 1]), read unaligned at 4-byte scale.
+        unsafe {
+            let base = table.as_ptr() as *const i64;
+            let q0 = _mm256_castsi256_ps(_mm256_i32gather_epi64::<4>(
+                base,
+                _mm256_castsi256_si128(idx.0),
+            ));
+            let q1 = _mm256_castsi256_ps(_mm256_i32gather_epi64::<4>(
+                base,
+                _mm256_extracti128_si256::<1>(idx.0),
+            ));
+            // Per 128-bit half: evens (odds) of q0 then q1; then put the 64-bit chunks in order.
+            let lo = _mm256_shuffle_ps::<0b10_00_10_00>(q0, q1);
+            let hi = _mm256_shuffle_ps::<0b11_01_11_01>(q0, q1);
+            let order = |v: __m256| {
+                _mm256_castpd_ps(_mm256_permute4x64_pd::<0b11_01_10_00>(_mm256_castps_pd(v)))
+            };
+            (F32x8(order(lo)), F32x8(order(hi)))
+        }
+    }
 }
 
 #[inline(always)]
@@ -612,6 +640,34 @@ impl Lanes for Pulp16 {
         }
         // SAFETY: every index was checked to lie in `0..table.len()`.
         I32x16(unsafe { _mm512_i32gather_epi32::<4>(idx.0, table.as_ptr().cast()) })
+    }
+    #[inline(always)]
+    fn gather2(self, table: &[f32], idx: I32x16) -> (F32x16, F32x16) {
+        let n = table.len().saturating_sub(1);
+        let ok = in_range16(idx, n);
+        if !ok {
+            gather_check(ok, &idx.to_array(), n);
+        }
+        // SAFETY: every `idx + 1` was checked to lie inside `table`; each 64-bit element is
+        // the pair (table[i], table[i + 1]), read unaligned at 4-byte scale.
+        unsafe {
+            let base = table.as_ptr() as *const i64;
+            let q0 = _mm512_castsi512_ps(_mm512_i32gather_epi64::<4>(
+                _mm512_castsi512_si256(idx.0),
+                base,
+            ));
+            let q1 = _mm512_castsi512_ps(_mm512_i32gather_epi64::<4>(
+                _mm512_extracti64x4_epi64::<1>(idx.0),
+                base,
+            ));
+            let evens =
+                _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
+            let odds = _mm512_setr_epi32(1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31);
+            (
+                F32x16(_mm512_permutex2var_ps(q0, evens, q1)),
+                F32x16(_mm512_permutex2var_ps(q0, odds, q1)),
+            )
+        }
     }
 }
 

@@ -109,6 +109,25 @@ impl Lanes for Sse {
         ];
         self.load_i32(&v)
     }
+    #[inline(always)]
+    fn gather2(self, table: &[f32], idx: I32x4) -> (F32x4, F32x4) {
+        // One 64-bit load per lane: (table[i], table[i + 1]).
+        let i = idx.to_array();
+        let n = table.len().saturating_sub(1);
+        let pair = |k: i32| {
+            let k = gather_index(k, n);
+            // SAFETY: reads the two floats of a checked subslice.
+            unsafe { _mm_castpd_ps(_mm_load_sd(table[k..k + 2].as_ptr().cast())) }
+        };
+        unsafe {
+            let ab = _mm_movelh_ps(pair(i[0]), pair(i[1])); // a0 a1 b0 b1
+            let cd = _mm_movelh_ps(pair(i[2]), pair(i[3])); // c0 c1 d0 d1
+            (
+                F32x4(_mm_shuffle_ps::<0b10_00_10_00>(ab, cd)),
+                F32x4(_mm_shuffle_ps::<0b11_01_11_01>(ab, cd)),
+            )
+        }
+    }
 }
 
 impl F32x4 {

@@ -189,20 +189,20 @@ macro_rules! wide_backend {
             fn recip(self) -> $f { $f(self.0.recip()) }
             #[inline(always)]
             fn floor(self) -> $f {
-                let t = $wi::round_float(self.0.trunc_int());
+                let t = $wi::round_float(self.0.fast_trunc_int());
                 let up = t.simd_gt(self.0) & $wf::splat(1.0);
                 let r = Self::copysign_of(t - up, self.0);
                 $f(self.has_fraction().bitselect(r, self.0))
             }
             #[inline(always)]
             fn round(self) -> $f {
-                let r = Self::copysign_of($wi::round_float(self.0.round_int()), self.0);
+                let r = Self::copysign_of($wi::round_float(self.0.fast_round_int()), self.0);
                 $f(self.has_fraction().bitselect(r, self.0))
             }
             #[inline(always)]
             fn mul_add(self, b: $f, c: $f) -> $f { $f(self.0.mul_add(b.0, c.0)) }
             #[inline(always)]
-            fn to_i32(self) -> $i { $i(self.0.trunc_int()) }
+            fn to_i32(self) -> $i { $i(self.0.fast_trunc_int()) }
             #[inline(always)]
             fn to_bits(self) -> $i { $i(cast(self.0)) }
             #[inline(always)]

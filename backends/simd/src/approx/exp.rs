@@ -1,7 +1,7 @@
 //! The paper's exponential (section 6.1): Padé [4/4] on [-3.8, 0], linear interpolation in a
 //! 1024-entry uniform table on [-14, -3.8].
 
-use super::tables::{EXP_SLOPE, EXP_VALUE};
+use super::tables::EXP;
 use crate::lanes::{Lanes, SimdF32, SimdI32, SimdMask};
 
 /// Largest relative error of [`exp`] on [-14, 14]: the Padé part's, reached at x = -3.8
@@ -32,7 +32,12 @@ pub fn exp<L: Lanes>(l: L, x: L::F32s) -> L::F32s {
         in_pade.select(pade(l, xn), table(l, xn))
     };
     let r = xn.lt(l.splat(TABLE_MIN)).select(l.splat(0.0), r);
-    let r = x.gt(l.splat(0.0)).select(l.splat(1.0) / r, r);
+    let positive = x.gt(l.splat(0.0));
+    let r = if positive.any() {
+        positive.select(l.splat(1.0) / r, r)
+    } else {
+        r
+    };
     x.is_nan().select(x, r)
 }
 
@@ -50,5 +55,6 @@ fn table<L: Lanes>(l: L, x: L::F32s) -> L::F32s {
     let t = (x - TABLE_MIN) * TABLE_SCALE;
     let i = t.to_i32().max(l.splat_i32(0)).min(l.splat_i32(1023));
     let f = t - i.to_f32();
-    l.gather(&EXP_VALUE, i) + f * l.gather(&EXP_SLOPE, i)
+    let (v0, v1) = l.gather2(&EXP, i);
+    (v1 - v0).mul_add(f, v0)
 }

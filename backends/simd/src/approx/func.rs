@@ -9,7 +9,7 @@ use super::{
 use crate::lanes::Lanes;
 
 /// An approximation, by name.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Approx {
     Exp,
     Log,

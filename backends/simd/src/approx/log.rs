@@ -1,7 +1,7 @@
 //! The paper's natural logarithm (section 6.1): Padé above 0.17, a 1024-entry interpolated
 //! table on (0, 0.17].
 
-use super::tables::{LN_MANTISSA_SLOPE, LN_MANTISSA_VALUE};
+use super::tables::LN_MANTISSA;
 use crate::lanes::{Lanes, SimdF32, SimdI32, SimdMask};
 
 /// Largest absolute error of [`log`] for positive finite x: the Padé part's, reached at
@@ -23,7 +23,12 @@ const LN_2: f32 = core::f32::consts::LN_2;
 pub fn log<L: Lanes>(l: L, x: L::F32s) -> L::F32s {
     let one = l.splat(1.0);
     let above_one = x.gt(one);
-    let xr = above_one.select(one / x, x); // in [0, 1] for non-negative x
+    // In [0, 1] for non-negative x (the division only where a lane needs it).
+    let xr = if above_one.any() {
+        above_one.select(one / x, x)
+    } else {
+        x
+    };
     let in_pade = xr.gt(l.splat(PADE_MIN));
     let r = if in_pade.all() {
         pade(l, xr)
@@ -59,6 +64,7 @@ fn table<L: Lanes>(l: L, x: L::F32s) -> L::F32s {
     let mantissa = bits & l.splat_i32(0x7f_ffff);
     let i = mantissa.shr_logical(13); // top 10 mantissa bits: the interval
     let f = (mantissa & l.splat_i32(0x1fff)).to_f32() * (1.0 / 8192.0);
-    let ln_m = l.gather(&LN_MANTISSA_VALUE, i) + f * l.gather(&LN_MANTISSA_SLOPE, i);
+    let (v0, v1) = l.gather2(&LN_MANTISSA, i);
+    let ln_m = (v1 - v0).mul_add(f, v0);
     e.mul_add(l.splat(LN_2), ln_m)
 }

@@ -20,7 +20,14 @@ impl Kernel for Eval<'_> {
     fn run<L: Lanes>(self, l: L) -> Vec<f32> {
         let mut out = vec![0.0; self.a.len()];
         let f = self.f;
-        map2(l, self.a, self.b, &mut out, |x, y| f.eval(l, x, y));
+        map2(
+            l,
+            self.a,
+            self.b,
+            &mut out,
+            #[inline(always)]
+            |x, y| f.eval(l, x, y),
+        );
         out
     }
 }

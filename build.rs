@@ -1,0 +1,34 @@
+//! Build script of `coherent`: records how this binary was built (compiler version, RUSTFLAGS,
+//! profile) for `machine.json` and `coherent info` (the results contract of DESIGN.md).
+
+use std::env;
+use std::process::Command;
+
+fn main() {
+    println!("cargo:rerun-if-changed=build.rs");
+    println!("cargo:rerun-if-env-changed=CARGO_ENCODED_RUSTFLAGS");
+
+    // The compiler that builds this crate: `$RUSTC -V`.
+    let rustc = env::var("RUSTC").unwrap_or_else(|_| "rustc".to_owned());
+    let version = Command::new(&rustc)
+        .arg("-V")
+        .output()
+        .ok()
+        .filter(|out| out.status.success())
+        .map(|out| String::from_utf8_lossy(&out.stdout).trim().to_owned())
+        .unwrap_or_else(|| "unknown".to_owned());
+    println!("cargo:rustc-env=COHERENT_RUSTC_VERSION={version}");
+
+    // RUSTFLAGS as cargo passed them: arguments separated by 0x1f.
+    let flags = env::var("CARGO_ENCODED_RUSTFLAGS").unwrap_or_default();
+    let flags = flags
+        .split('\x1f')
+        .filter(|flag| !flag.is_empty())
+        .collect::<Vec<_>>()
+        .join(" ");
+    println!("cargo:rustc-env=COHERENT_RUSTFLAGS={flags}");
+
+    // `debug` or `release` (the profile's base: `bench` builds report `release`).
+    let profile = env::var("PROFILE").unwrap_or_else(|_| "unknown".to_owned());
+    println!("cargo:rustc-env=COHERENT_PROFILE={profile}");
+}

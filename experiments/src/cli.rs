@@ -1,0 +1,236 @@
+//! The `reproduce` command (paper section 7, regenerated): parses the arguments, prepares the
+//! output folder, runs the selected experiments and writes `machine.json` and `README.md`.
+
+use crate::ctx::Ctx;
+use crate::experiment::{self, Experiment, Status};
+use crate::readme::{self, RunInfo};
+use anyhow::{Context, bail};
+use clap::Parser;
+use coherent::machine::Machine;
+use std::ffi::OsString;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+/// Regenerates the paper's tables and the testbed's comparisons: CSV files, plots, machine.json
+/// and README.md in the output folder.
+#[derive(Parser, Debug)]
+#[command(name = "reproduce", version, about, after_help = after_help())]
+pub struct Args {
+    /// Small sizes: the whole run in a few minutes (a smoke test, not the paper's sizes).
+    #[arg(long)]
+    pub quick: bool,
+    /// Run only these experiments (comma separated); the README keeps the others' last results.
+    #[arg(long, value_delimiter = ',', value_name = "NAME,...")]
+    pub only: Option<Vec<String>>,
+    /// Run nothing: re-render README.md from the CSV files and machine.json already in DIR.
+    #[arg(long, conflicts_with_all = ["only", "quick"])]
+    pub report_only: bool,
+    /// Output folder. Default: `results/` at the root of the workspace this binary was built
+    /// from (wherever it is run); a relative DIR is taken from the current directory.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+}
+
+fn after_help() -> String {
+    let mut text = String::from("Experiments:\n");
+    for e in crate::EXPERIMENTS {
+        let status = e
+            .planned_text()
+            .map_or(String::new(), |t| format!(" [{t}]"));
+        text.push_str(&format!("  {:<8} {}{status}\n", e.name, e.description));
+    }
+    text
+}
+
+/// `results/` at the workspace root (the parent of this crate's manifest folder, fixed at
+/// compile time); `./results` if that folder is gone (the binary was moved).
+pub fn default_out() -> PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).parent();
+    match root {
+        Some(root) if root.is_dir() => root.join("results"),
+        _ => PathBuf::from("results"),
+    }
+}
+
+/// Exit code for bad arguments (as clap uses).
+const USAGE: u8 = 2;
+
+/// The whole program over a given registry: returns the process exit code. Errors go to
+/// stderr; nothing here panics on bad input.
+pub fn main(args: impl IntoIterator<Item = OsString>, registry: &[Experiment]) -> ExitCode {
+    let argv: Vec<OsString> = args.into_iter().collect();
+    let args = match Args::try_parse_from(&argv) {
+        Ok(args) => args,
+        Err(e) => {
+            // Help and version go to stdout with success; usage errors to stderr.
+            let _ = e.print();
+            return if e.use_stderr() {
+                ExitCode::from(USAGE)
+            } else {
+                ExitCode::SUCCESS
+            };
+        }
+    };
+    let selected = match experiment::select(registry, args.only.as_deref()) {
+        Ok(selected) => selected,
+        Err(e) => {
+            eprintln!("reproduce: error: {e}");
+            return ExitCode::from(USAGE);
+        }
+    };
+    let given = argv
+        .iter()
+        .skip(1)
+        .map(|a| a.to_string_lossy())
+        .collect::<Vec<_>>()
+        .join(" ");
+    match run(&args, &given, registry, &selected) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("reproduce: error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Creates the output folder and checks it is a writable folder.
+pub fn prepare_out(out: &Path) -> anyhow::Result<()> {
+    if out.exists() && !out.is_dir() {
+        bail!("output folder {} exists and is not a folder", out.display());
+    }
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("cannot create output folder {}", out.display()))?;
+    let probe = out.join(".reproduce-write-test");
+    std::fs::write(&probe, b"")
+        .with_context(|| format!("output folder {} is not writable", out.display()))?;
+    let _ = std::fs::remove_file(probe);
+    Ok(())
+}
+
+fn run(
+    args: &Args,
+    given: &str,
+    registry: &[Experiment],
+    selected: &[&Experiment],
+) -> anyhow::Result<()> {
+    let out = args.out.clone().unwrap_or_else(default_out);
+    prepare_out(&out)?;
+    let machine_json = out.join("machine.json");
+    if args.report_only {
+        // machine.json describes the machine that measured: keep it.
+        let machine = std::fs::read_to_string(&machine_json)
+            .ok()
+            .and_then(|text| Machine::from_json(&text).ok())
+            .unwrap_or_else(Machine::detect);
+        let ctx = Ctx::new(&out, false, machine);
+        let info = RunInfo {
+            ran: Vec::new(),
+            args: given.to_owned(),
+        };
+        return write_readme(&ctx, registry, info);
+    }
+    let machine = Machine::detect();
+    std::fs::write(&machine_json, machine.to_json() + "\n")
+        .with_context(|| format!("cannot write {}", machine_json.display()))?;
+    let mut ctx = Ctx::new(&out, args.quick, machine);
+    eprintln!(
+        "reproduce: {} run into {} ({} experiment{})",
+        if args.quick { "quick" } else { "full" },
+        out.display(),
+        selected.len(),
+        if selected.len() == 1 { "" } else { "s" }
+    );
+
+    let mut failed = Vec::new();
+    let mut ran = Vec::new();
+    for experiment in selected {
+        let Status::Ready { run, .. } = experiment.status else {
+            continue; // `select` refuses planned ones
+        };
+        eprintln!("== {}: {}", experiment.name, experiment.description);
+        let start = Instant::now();
+        // A panic is a bug of that experiment: report it and go on with the others.
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(&mut ctx)))
+            .unwrap_or_else(|_| Err(anyhow::anyhow!("panicked (a bug: please report it)")));
+        match result {
+            Ok(()) => {
+                eprintln!(
+                    "   {} done in {:.1} s",
+                    experiment.name,
+                    start.elapsed().as_secs_f64()
+                );
+                ran.push(experiment.name.to_owned());
+            }
+            Err(e) => {
+                eprintln!("reproduce: experiment {} failed: {e:#}", experiment.name);
+                failed.push(experiment.name);
+            }
+        }
+    }
+    if args.only.is_none() {
+        for e in registry.iter().filter(|e| !e.is_ready()) {
+            eprintln!(
+                "   skipped {}: {}",
+                e.name,
+                e.planned_text().unwrap_or_default()
+            );
+        }
+    }
+
+    for note in ctx.notes() {
+        eprintln!("   note: {note}");
+    }
+    let info = RunInfo {
+        ran,
+        args: given.to_owned(),
+    };
+    write_readme(&ctx, registry, info)?;
+    if !failed.is_empty() {
+        bail!("experiments failed: {}", failed.join(", "));
+    }
+    Ok(())
+}
+
+fn write_readme(ctx: &Ctx, registry: &[Experiment], info: RunInfo) -> anyhow::Result<()> {
+    let (readme, problems) = readme::write(ctx, registry, &info)?;
+    for problem in &problems {
+        eprintln!("reproduce: warning: README: {problem}");
+    }
+    eprintln!("reproduce: wrote {}", readme.display());
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_output_folder_is_created_or_refused_with_its_path() {
+        let dir = tempfile::tempdir().unwrap();
+        let nested = dir.path().join("a/b");
+        prepare_out(&nested).unwrap();
+        assert!(nested.is_dir());
+
+        let file = dir.path().join("file");
+        std::fs::write(&file, "x").unwrap();
+        let e = prepare_out(&file).unwrap_err();
+        assert!(e.to_string().contains("is not a folder"), "{e}");
+        let e = prepare_out(&file.join("sub")).unwrap_err();
+        let msg = format!("{e:#}");
+        assert!(
+            msg.contains("cannot create output folder") && msg.contains("file/sub"),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn the_default_output_is_the_workspace_results_folder() {
+        let out = default_out();
+        assert!(out.ends_with("results"));
+        assert!(
+            out.parent().unwrap().join("Cargo.toml").is_file(),
+            "{out:?}"
+        );
+    }
+}
