@@ -102,7 +102,10 @@ fn info(json: bool) -> anyhow::Result<()> {
          pulp8/16 choose AVX2/AVX-512 at run time."
     )?;
     writeln!(out, "accelerators:")?;
-    writeln!(out, "  bsp     the paper's two-level BSP, packets of every backend's width")?;
+    writeln!(
+        out,
+        "  bsp     the paper's two-level BSP, packets of every backend's width"
+    )?;
     writeln!(out, "  embree  {}", embree_state())?;
     writeln!(out, "  obvhs   {}", obvhs_state())?;
     out.flush()?;
