@@ -18,8 +18,10 @@ pub mod mesh;
 pub mod packet;
 pub mod ray;
 pub mod scene;
+pub mod scenes;
 pub mod shapes;
 pub mod triangle;
+pub mod workload;
 
 pub use aabb::Aabb;
 pub use accel::{Accel, BuildStats};

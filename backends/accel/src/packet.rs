@@ -1,67 +1,19 @@
 //! Packets of rays and hits, one ray per lane (paper section 3: rays are traced `N` at a time
 //! under a mask of active lanes).
 
+pub use coherent_simd::Vec3s;
 use coherent_simd::{Lanes, SimdF32, SimdI32, SimdMask};
 use glam::{Affine3A, Vec3};
 
 use crate::{Hit1, Ray1};
 
-/// One 3-vector per lane (structure of arrays).
-///
-/// A stand-in until `coherent_simd` has its own `Vec3s`: only what the traversal interface
-/// needs.
-#[derive(Debug, Clone, Copy)]
-pub struct Vec3s<L: Lanes> {
-    pub x: L::F32s,
-    pub y: L::F32s,
-    pub z: L::F32s,
-}
-
-impl<L: Lanes> Vec3s<L> {
-    #[inline(always)]
-    pub fn new(x: L::F32s, y: L::F32s, z: L::F32s) -> Self {
-        Self { x, y, z }
-    }
-
-    /// `v` in every lane.
-    #[inline(always)]
-    pub fn splat(l: L, v: Vec3) -> Self {
-        Self::new(l.splat(v.x), l.splat(v.y), l.splat(v.z))
-    }
-
-    /// Lanes from a function of the lane index (packing, tests).
-    #[inline(always)]
-    pub fn from_fn(l: L, mut f: impl FnMut(usize) -> Vec3) -> Self {
-        let mut buf = [Vec3::ZERO; coherent_simd::MAX_LANES];
-        for (i, v) in buf.iter_mut().enumerate().take(L::N) {
-            *v = f(i);
-        }
-        Self::new(
-            l.from_fn(|i| buf[i].x),
-            l.from_fn(|i| buf[i].y),
-            l.from_fn(|i| buf[i].z),
-        )
-    }
-
-    /// Lane `i` (slow: unpacking, tests).
-    #[inline(always)]
-    pub fn lane(&self, i: usize) -> Vec3 {
-        Vec3::new(self.x.lane(i), self.y.lane(i), self.z.lane(i))
-    }
-
-    /// Component `axis` (0, 1 or 2).
-    #[inline(always)]
-    pub fn axis(&self, axis: usize) -> L::F32s {
-        match axis {
-            0 => self.x,
-            1 => self.y,
-            _ => self.z,
-        }
-    }
-
-    #[inline(always)]
-    pub fn dot(&self, o: &Self) -> L::F32s {
-        self.x * o.x + self.y * o.y + self.z * o.z
+/// Component `axis` (0, 1 or 2) of a packet vector.
+#[inline(always)]
+pub fn axis<L: Lanes>(v: &Vec3s<L>, axis: usize) -> L::F32s {
+    match axis {
+        0 => v.x,
+        1 => v.y,
+        _ => v.z,
     }
 }
 
@@ -117,7 +69,8 @@ impl<L: Lanes> Rays<L> {
             & finite(d.x)
             & finite(d.y)
             & finite(d.z)
-            & d.dot(d).gt(zero)
+            // Without FMA, as `Ray1::is_valid` computes it.
+            & (d.x * d.x + d.y * d.y + d.z * d.z).gt(zero)
             & self.tmin.le(self.tmax)
     }
 

@@ -52,11 +52,24 @@ pub struct TriAccel {
 /// The axes `u`, `v` that follow `k`.
 #[inline(always)]
 pub const fn uv_axes(k: u32) -> (usize, usize) {
-    match k {
-        0 => (1, 2),
-        1 => (2, 0),
-        _ => (0, 1),
-    }
+    (NEXT_U[(k & 3) as usize], NEXT_V[(k & 3) as usize])
+}
+
+/// `(k + 1) % 3` and `(k + 2) % 3` by table (4 entries: indexing with `k & 3` needs no bounds
+/// check and no branch).
+const NEXT_U: [usize; 4] = [1, 2, 0, 1];
+const NEXT_V: [usize; 4] = [2, 0, 1, 2];
+
+/// A vector as `[x, y, z, z]`, indexable by `k & 3` without bounds checks or branches.
+#[inline(always)]
+pub fn xyzz(v: Vec3) -> [f32; 4] {
+    [v.x, v.y, v.z, v.z]
+}
+
+/// A packet vector as `[x, y, z, z]` (see [`xyzz`]).
+#[inline(always)]
+pub fn xyzz_s<L: Lanes>(v: &Vec3s<L>) -> [L::F32s; 4] {
+    [v.x, v.y, v.z, v.z]
 }
 
 impl TriAccel {
@@ -95,7 +108,19 @@ impl TriAccel {
     /// The hit `(t, u, v)` of the ray `o + t d` with `tmin <= t < tmax`, if any.
     #[inline(always)]
     pub fn intersect1(&self, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<(f32, f32, f32)> {
-        let k = self.k as usize;
+        self.intersect1x(&xyzz(o), &xyzz(d), tmin, tmax)
+    }
+
+    /// [`Self::intersect1`] with the ray as [`xyzz`] arrays (the traversal's form).
+    #[inline(always)]
+    pub fn intersect1x(
+        &self,
+        o: &[f32; 4],
+        d: &[f32; 4],
+        tmin: f32,
+        tmax: f32,
+    ) -> Option<(f32, f32, f32)> {
+        let k = (self.k & 3) as usize;
         let (ku, kv) = uv_axes(self.k);
         let (wk, wu, wv) = (o[k] - self.a_k, o[ku] - self.a_u, o[kv] - self.a_v);
         let (dk, du, dv) = (d[k], d[ku], d[kv]);
@@ -131,12 +156,27 @@ impl TriAccel {
         tmax: L::F32s,
         active: L::Mask,
     ) -> (L::Mask, L::F32s, L::F32s, L::F32s) {
-        let k = self.k as usize;
+        self.intersectx(l, &xyzz_s(o), &xyzz_s(d), tmin, tmax, active)
+    }
+
+    /// [`Self::intersect`] with the rays as [`xyzz_s`] arrays (the traversal's form).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub fn intersectx<L: Lanes>(
+        &self,
+        l: L,
+        o: &[L::F32s; 4],
+        d: &[L::F32s; 4],
+        tmin: L::F32s,
+        tmax: L::F32s,
+        active: L::Mask,
+    ) -> (L::Mask, L::F32s, L::F32s, L::F32s) {
+        let k = (self.k & 3) as usize;
         let (ku, kv) = uv_axes(self.k);
-        let wk = o.axis(k) - l.splat(self.a_k);
-        let wu = o.axis(ku) - l.splat(self.a_u);
-        let wv = o.axis(kv) - l.splat(self.a_v);
-        let (dk, du, dv) = (d.axis(k), d.axis(ku), d.axis(kv));
+        let wk = o[k] - l.splat(self.a_k);
+        let wu = o[ku] - l.splat(self.a_u);
+        let wv = o[kv] - l.splat(self.a_v);
+        let (dk, du, dv) = (d[k], d[ku], d[kv]);
         let n_u = l.splat(self.n_u);
         let n_v = l.splat(self.n_v);
         let denom = dk + n_u * du + n_v * dv;

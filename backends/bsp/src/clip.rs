@@ -8,6 +8,21 @@ use glam::{DVec3, Vec3};
 /// triangle (Sutherland-Hodgman, in f64) by the six planes, rounds the result outward to
 /// f32 and cuts it by the voxel, so it never leaves out a part of the triangle.
 pub fn clipped_bounds(t: &[Vec3; 3], voxel: &Aabb) -> Option<Aabb> {
+    let tb = Aabb::from_points(*t);
+    // Planes the triangle's box does not cross cannot cut it.
+    let cuts: [[bool; 2]; 3] =
+        core::array::from_fn(|k| [tb.min[k] < voxel.min[k], tb.max[k] > voxel.max[k]]);
+    if !tb
+        .intersection(*voxel)
+        .min
+        .cmple(tb.intersection(*voxel).max)
+        .all()
+    {
+        return None;
+    }
+    if cuts.iter().flatten().all(|c| !c) {
+        return Some(tb);
+    }
     // A triangle clipped by 6 planes has at most 9 vertices.
     let mut poly = [DVec3::ZERO; 10];
     let mut tmp = [DVec3::ZERO; 10];
@@ -17,7 +32,13 @@ pub fn clipped_bounds(t: &[Vec3; 3], voxel: &Aabb) -> Option<Aabb> {
     }
     let (lo, hi) = (voxel.min.as_dvec3(), voxel.max.as_dvec3());
     for axis in 0..3 {
-        for (bound, keep_above) in [(lo[axis], true), (hi[axis], false)] {
+        for (side, (bound, keep_above)) in [(lo[axis], true), (hi[axis], false)]
+            .into_iter()
+            .enumerate()
+        {
+            if !cuts[axis][side] {
+                continue;
+            }
             n = clip_plane(&poly[..n], &mut tmp, axis, bound, keep_above);
             if n == 0 {
                 return None;

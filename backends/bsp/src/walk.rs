@@ -4,8 +4,10 @@
 //! have finished; a node is skipped when every active lane's hit is nearer than it. When a
 //! subtree's active lanes fall to a threshold, its lanes continue ray by ray.
 
+use coherent_accel::triangle::xyzz_s;
 use coherent_accel::{Aabb, Rays, Vec3s};
 use coherent_simd::{Lanes, SimdF32, SimdI32, SimdMask};
+use glam::Vec3;
 
 use crate::KdTree;
 use crate::bsp::{Bsp, MeshTree};
@@ -24,21 +26,37 @@ struct Entry<L: Lanes> {
     m: L::Mask,
 }
 
-/// Rays of one sign group prepared for traversal.
-pub(crate) struct RaysX<'a, L: Lanes> {
-    pub o: &'a Vec3s<L>,
-    pub d: &'a Vec3s<L>,
-    pub inv: &'a Vec3s<L>,
+/// Rays prepared for traversal: vectors as `[x, y, z, z]` (indexed by an axis `& 3`).
+#[derive(Clone, Copy)]
+pub(crate) struct RaysX<L: Lanes> {
+    pub o: [L::F32s; 4],
+    pub d: [L::F32s; 4],
+    /// `1 / d` per lane and axis (infinite for zero components).
+    pub inv: [L::F32s; 4],
     pub tmin: L::F32s,
     /// Bit `k` set when the group's direction is negative along axis `k`.
     pub signs: u32,
 }
 
-/// `1 / d` per lane and axis.
-#[inline(always)]
-pub(crate) fn inverse<L: Lanes>(l: L, d: &Vec3s<L>) -> Vec3s<L> {
-    let one = l.splat(1.0);
-    Vec3s::new(one / d.x, one / d.y, one / d.z)
+impl<L: Lanes> RaysX<L> {
+    #[inline(always)]
+    pub fn new(l: L, o: &Vec3s<L>, d: &Vec3s<L>, tmin: L::F32s) -> Self {
+        let one = l.splat(1.0);
+        Self {
+            o: xyzz_s(o),
+            d: xyzz_s(d),
+            inv: [one / d.x, one / d.y, one / d.z, one / d.z],
+            tmin,
+            signs: 0,
+        }
+    }
+
+    /// Lane `i` as a single ray.
+    #[inline(always)]
+    pub fn lane(&self, i: usize) -> Ray1x {
+        let v = |a: &[L::F32s; 4]| Vec3::new(a[0].lane(i), a[1].lane(i), a[2].lane(i));
+        Ray1x::new(v(&self.o), v(&self.d), self.tmin.lane(i))
+    }
 }
 
 /// The ray segments inside box `b`, cut to `[t0, t1]`, with the arithmetic of
@@ -47,15 +65,15 @@ pub(crate) fn inverse<L: Lanes>(l: L, d: &Vec3s<L>) -> Vec3s<L> {
 pub(crate) fn clip_box<L: Lanes>(
     l: L,
     b: &Aabb,
-    o: &Vec3s<L>,
-    inv: &Vec3s<L>,
+    o: &[L::F32s; 4],
+    inv: &[L::F32s; 4],
     mut t0: L::F32s,
     mut t1: L::F32s,
 ) -> (L::F32s, L::F32s) {
     let (ninf, inf) = (l.splat(f32::NEG_INFINITY), l.splat(f32::INFINITY));
     for k in 0..3 {
-        let a = (l.splat(b.min[k]) - o.axis(k)) * inv.axis(k);
-        let c = (l.splat(b.max[k]) - o.axis(k)) * inv.axis(k);
+        let a = (l.splat(b.min[k]) - o[k]) * inv[k];
+        let c = (l.splat(b.max[k]) - o[k]) * inv[k];
         // NaN: a ray in a face plane with a zero direction component; the slab does not
         // limit it.
         let nan = a.is_nan() | c.is_nan();
@@ -113,7 +131,7 @@ pub(crate) fn sign_groups<L: Lanes>(
 pub(crate) fn walk<L: Lanes, S, C: Counters>(
     l: L,
     tree: &KdTree,
-    r: &RaysX<'_, L>,
+    r: &RaysX<L>,
     start: usize,
     mut tn: L::F32s,
     mut tf: L::F32s,
@@ -141,8 +159,8 @@ pub(crate) fn walk<L: Lanes, S, C: Counters>(
                     break;
                 }
                 c.inner();
-                let k = n.axis();
-                let ts = (l.splat(n.split()) - r.o.axis(k)) * r.inv.axis(k);
+                let k = n.axis() & 3;
+                let ts = (l.splat(n.split()) - r.o[k]) * r.inv[k];
                 let neg = (r.signs >> k & 1) as usize;
                 let near = n.left() + neg;
                 let far = n.left() + 1 - neg;
@@ -193,7 +211,7 @@ pub(crate) fn mesh_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
     l: L,
     mesh: &MeshTree,
     inst: u32,
-    r: &RaysX<'_, L>,
+    r: &RaysX<L>,
     tn: L::F32s,
     tf: L::F32s,
     m: L::Mask,
@@ -215,7 +233,9 @@ pub(crate) fn mesh_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
         thr,
         q,
         c,
+        #[inline(always)]
         |q| q.limit(),
+        #[inline(always)]
         |q, c, items, m| {
             let bits = m.bitmask();
             for &i in items {
@@ -232,7 +252,7 @@ pub(crate) fn mesh_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
                 }
                 c.tri_test(mm.count());
                 let tri = &tris[i as usize];
-                let (hit, t, u, v) = tri.intersect(l, r.o, r.d, r.tmin, q.limit(), mm);
+                let (hit, t, u, v) = tri.intersectx(l, &r.o, &r.d, r.tmin, q.limit(), mm);
                 if hit.any() {
                     q.hits(l, hit, t, u, v, tri.prim, inst);
                     if q.finished(m) {
@@ -241,6 +261,7 @@ pub(crate) fn mesh_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
                 }
             }
         },
+        #[inline(always)]
         |q, c, node, m, tn, tf| {
             let mut bits = m.bitmask();
             while bits != 0 {
@@ -248,7 +269,7 @@ pub(crate) fn mesh_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
                 bits &= bits - 1;
                 let mut task = MeshTask {
                     mesh,
-                    r: Ray1x::new(r.o.lane(i), r.d.lane(i), r.tmin.lane(i)),
+                    r: r.lane(i),
                     inst,
                     start: (node, tn.lane(i), tf.lane(i)),
                     mailbox,
@@ -269,7 +290,7 @@ fn enter_instance<L: Lanes, Q: QueryP<L>, C: Counters>(
     bsp: &Bsp,
     i: u32,
     world: &Rays<L>,
-    wr: &RaysX<'_, L>,
+    wr: &RaysX<L>,
     m: L::Mask,
     thr: u32,
     q: &mut Q,
@@ -278,7 +299,7 @@ fn enter_instance<L: Lanes, Q: QueryP<L>, C: Counters>(
     let inst = &bsp.instances[i as usize];
     let mesh = &bsp.meshes[inst.mesh as usize];
     if inst.identity {
-        let (t0, t1) = clip_box(l, &mesh.tree.bounds, wr.o, wr.inv, wr.tmin, q.limit());
+        let (t0, t1) = clip_box(l, &mesh.tree.bounds, &wr.o, &wr.inv, wr.tmin, q.limit());
         let mm = m & t0.le(t1);
         if mm.any() {
             c.instance(mm.count());
@@ -287,24 +308,24 @@ fn enter_instance<L: Lanes, Q: QueryP<L>, C: Counters>(
         return;
     }
     let obj = world.transformed(l, &inst.object_from_world);
-    let inv = inverse(l, &obj.dir);
-    let (t0, t1) = clip_box(l, &mesh.tree.bounds, &obj.origin, &inv, wr.tmin, q.limit());
+    let mut r = RaysX::new(l, &obj.origin, &obj.dir, wr.tmin);
+    let (t0, t1) = clip_box(l, &mesh.tree.bounds, &r.o, &r.inv, wr.tmin, q.limit());
     let mm = m & t0.le(t1);
     if mm.none() {
         return;
     }
     c.instance(mm.count());
     let neg = sign_bits(l, &obj.dir);
-    sign_groups(l, mm, neg, |g, signs| {
-        let r = RaysX {
-            o: &obj.origin,
-            d: &obj.dir,
-            inv: &inv,
-            tmin: wr.tmin,
-            signs,
-        };
-        mesh_packet(l, mesh, i, &r, t0, t1, g, thr, bsp.params.mailbox, q, c);
-    });
+    sign_groups(
+        l,
+        mm,
+        neg,
+        #[inline(always)]
+        |g, signs| {
+            r.signs = signs;
+            mesh_packet(l, mesh, i, &r, t0, t1, g, thr, bsp.params.mailbox, q, c);
+        },
+    );
 }
 
 /// A packet through the whole scene: lanes `active` of `rays` (invalid lanes dropped).
@@ -321,52 +342,55 @@ pub(crate) fn scene_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
     if m.none() {
         return;
     }
-    let inv = inverse(l, &rays.dir);
+    let mut wr = RaysX::new(l, &rays.origin, &rays.dir, rays.tmin);
     // The scene box first: lanes that miss it are done.
-    let (t0, t1) = clip_box(l, &bsp.top.bounds, &rays.origin, &inv, rays.tmin, q.limit());
+    let (t0, t1) = clip_box(l, &bsp.top.bounds, &wr.o, &wr.inv, rays.tmin, q.limit());
     let m = m & t0.le(t1);
     if m.none() {
         return;
     }
     let thr = bsp.params.threshold_for(L::N);
     let neg = sign_bits(l, &rays.dir);
-    sign_groups(l, m, neg, |g, signs| {
-        let wr = RaysX {
-            o: &rays.origin,
-            d: &rays.dir,
-            inv: &inv,
-            tmin: rays.tmin,
-            signs,
-        };
-        let mut seen = MailboxP::new();
-        walk(
-            l,
-            &bsp.top,
-            &wr,
-            0,
-            t0,
-            t1,
-            g,
-            0,
-            q,
-            c,
-            |q| q.limit(),
-            |q, c, items, m| {
-                let bits = m.bitmask();
-                for &i in items {
-                    let new = seen.untested(i, bits);
-                    if new == 0 {
-                        continue;
+    sign_groups(
+        l,
+        m,
+        neg,
+        #[inline(always)]
+        |g, signs| {
+            wr.signs = signs;
+            let mut seen = MailboxP::new();
+            walk(
+                l,
+                &bsp.top,
+                &wr,
+                0,
+                t0,
+                t1,
+                g,
+                0,
+                q,
+                c,
+                #[inline(always)]
+                |q| q.limit(),
+                #[inline(always)]
+                |q, c, items, m| {
+                    let bits = m.bitmask();
+                    for &i in items {
+                        let new = seen.untested(i, bits);
+                        if new == 0 {
+                            continue;
+                        }
+                        let mm = if new == bits {
+                            m
+                        } else {
+                            m & l.mask_from_bits(new)
+                        };
+                        enter_instance(l, bsp, i, rays, &wr, mm, thr, q, c);
                     }
-                    let mm = if new == bits {
-                        m
-                    } else {
-                        m & l.mask_from_bits(new)
-                    };
-                    enter_instance(l, bsp, i, rays, &wr, mm, thr, q, c);
-                }
-            },
-            |_, _, _, _, _, _| {},
-        );
-    });
+                },
+                #[inline(always)]
+                |_, _, _, _, _, _| {},
+            );
+        },
+    );
 }

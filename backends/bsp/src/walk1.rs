@@ -2,6 +2,7 @@
 //! packets switch to when few lanes stay active): near/far order with an explicit stack,
 //! the intersection cache, early exit once the nearest hit is before the next node.
 
+use coherent_accel::triangle::xyzz;
 use coherent_accel::{Hit1, transform_point1, transform_vector1};
 use glam::Vec3;
 
@@ -12,28 +13,37 @@ use crate::mailbox::Mailbox1;
 use crate::query::{LaneTask, Query1};
 use crate::stack::Stack;
 
-/// A ray prepared for traversal.
+/// A ray prepared for traversal; vectors as `[x, y, z, z]`, indexed by an axis `& 3`.
 #[derive(Clone, Copy)]
 pub(crate) struct Ray1x {
-    pub o: Vec3,
-    pub d: Vec3,
+    pub o: [f32; 4],
+    pub d: [f32; 4],
     /// `1 / d` per axis (infinite for zero components).
-    pub inv: Vec3,
+    pub inv: [f32; 4],
     pub tmin: f32,
     /// Per axis 1 when the direction's sign bit is set: the right child is nearer.
-    pub neg: [usize; 3],
+    pub neg: [usize; 4],
 }
 
 impl Ray1x {
     #[inline(always)]
     pub fn new(o: Vec3, d: Vec3, tmin: f32) -> Self {
+        let inv = Vec3::new(1.0 / d.x, 1.0 / d.y, 1.0 / d.z);
+        let neg = [d.x, d.y, d.z, d.z].map(|c| c.is_sign_negative() as usize);
         Self {
-            o,
-            d,
-            inv: Vec3::new(1.0 / d.x, 1.0 / d.y, 1.0 / d.z),
+            o: xyzz(o),
+            d: xyzz(d),
+            inv: xyzz(inv),
             tmin,
-            neg: [0, 1, 2].map(|k| d[k].is_sign_negative() as usize),
+            neg,
         }
+    }
+
+    /// The part of the ray in `b`, cut to `[tmin, tmax]`.
+    #[inline(always)]
+    pub fn clip(&self, b: &coherent_accel::Aabb, tmax: f32) -> Option<(f32, f32)> {
+        let v = |a: &[f32; 4]| Vec3::new(a[0], a[1], a[2]);
+        b.clip1(v(&self.o), v(&self.inv), self.tmin, tmax)
     }
 }
 
@@ -76,7 +86,7 @@ pub(crate) fn walk1<S, C: Counters>(
         let n = nodes[node];
         if !n.is_leaf() {
             c.inner();
-            let k = n.axis();
+            let k = n.axis() & 3;
             let ts = (n.split() - r.o[k]) * r.inv[k];
             let near = n.left() + r.neg[k];
             let far = n.left() + 1 - r.neg[k];
@@ -123,7 +133,7 @@ pub(crate) fn mesh1<Q: Query1, C: Counters>(
 ) -> bool {
     let (node, tn, tf) = match start {
         Some(s) => s,
-        None => match mesh.tree.bounds.clip1(r.o, r.inv, r.tmin, q.limit()) {
+        None => match r.clip(&mesh.tree.bounds, q.limit()) {
             Some((t0, t1)) => (0, t0, t1),
             None => return false,
         },
@@ -138,7 +148,9 @@ pub(crate) fn mesh1<Q: Query1, C: Counters>(
         tf,
         q,
         c,
+        #[inline(always)]
         |q| q.limit(),
+        #[inline(always)]
         |q, c, items| {
             for &i in items {
                 if mailbox && mb.seen(i) {
@@ -147,7 +159,7 @@ pub(crate) fn mesh1<Q: Query1, C: Counters>(
                 }
                 c.tri_test(1);
                 let tri = &tris[i as usize];
-                if let Some((t, u, v)) = tri.intersect1(r.o, r.d, r.tmin, q.limit()) {
+                if let Some((t, u, v)) = tri.intersect1x(&r.o, &r.d, r.tmin, q.limit()) {
                     let h = Hit1 {
                         t,
                         u,
@@ -176,7 +188,7 @@ pub(crate) fn scene1<Q: Query1, C: Counters>(
     c: &mut C,
 ) {
     let r = Ray1x::new(o, d, tmin);
-    let Some((t0, t1)) = bsp.top.bounds.clip1(r.o, r.inv, tmin, q.limit()) else {
+    let Some((t0, t1)) = r.clip(&bsp.top.bounds, q.limit()) else {
         return;
     };
     let mut seen = Mailbox1::new();
@@ -188,7 +200,9 @@ pub(crate) fn scene1<Q: Query1, C: Counters>(
         t1,
         q,
         c,
+        #[inline(always)]
         |q| q.limit(),
+        #[inline(always)]
         |q, c, items| {
             for &i in items {
                 if seen.seen(i) {

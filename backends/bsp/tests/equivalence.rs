@@ -5,9 +5,11 @@
 mod common;
 
 use coherent_accel::shapes::{Rng, icosphere, soup};
-use coherent_accel::{Accel, Mesh, Ray1, Rays, Scene};
+use std::sync::OnceLock;
+
+use coherent_accel::{Accel, BruteForce, Mesh, Ray1, Rays, Scene};
 use coherent_bsp::{Bsp, BspParams, SahParams};
-use coherent_simd::Lanes;
+use coherent_simd::{Backend, Kernel, Lanes};
 use common::*;
 use glam::Vec3;
 use proptest::prelude::*;
@@ -155,13 +157,17 @@ pub fn edge_cases<L: Lanes>(l: L) {
     check(&scene, &rays);
 }
 
-/// 10^5 triangles: a few hundred rays against brute force.
+/// 10^5 triangles: built once, 64 rays against brute force per backend.
 pub fn large_scene<L: Lanes>(l: L) {
-    let scene = one(soup("big", 100_000, 20.0, 0.8, 11));
-    let rays = random_rays(12, &scene, 192);
-    let (bf, bsp) = build_both(&scene, &BspParams::default());
+    static LARGE: OnceLock<(BruteForce, Bsp, Vec<Ray1>)> = OnceLock::new();
+    let (bf, bsp, rays) = LARGE.get_or_init(|| {
+        let scene = one(soup("big", 100_000, 20.0, 0.8, 11));
+        let rays = random_rays(12, &scene, 64);
+        let (bf, bsp) = build_both(&scene, &BspParams::default());
+        (bf, bsp, rays)
+    });
     assert_eq!(bsp.stats().triangles, 100_000);
-    check_all_queries(l, &bf, &bsp, &rays, 13).unwrap();
+    check_all_queries(l, bf, bsp, rays, 13).unwrap();
 }
 
 /// Moving instances and rebuilding the top level answers as a fresh build does.
@@ -198,31 +204,90 @@ pub fn moving_instances<L: Lanes>(l: L, seed: u64) {
     assert!(e.contains("instance 2"), "{e}");
 }
 
-/// Stamps the tests out for one lane backend: `$name`, the token expression.
+struct EdgeCases;
+impl Kernel for EdgeCases {
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) {
+        edge_cases(l)
+    }
+}
+
+struct LargeScene;
+impl Kernel for LargeScene {
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) {
+        large_scene(l)
+    }
+}
+
+struct MovingInstances;
+impl Kernel for MovingInstances {
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) {
+        for seed in 0..4 {
+            moving_instances(l, seed);
+        }
+    }
+}
+
+/// One random scene, random rays, one parameter set.
+struct RandomScene {
+    seed: u64,
+    tris: usize,
+    meshes: usize,
+    instances: usize,
+    preset: usize,
+}
+impl Kernel for RandomScene {
+    type Output = Result<(), String>;
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) -> Result<(), String> {
+        let scene = random_scene(self.seed, self.tris, self.meshes, self.instances);
+        let rays = random_rays(self.seed, &scene, 96);
+        let p = param_sets(L::N).swap_remove(self.preset);
+        let (bf, bsp) = build_both(&scene, &p);
+        check_all_queries(l, &bf, &bsp, &rays, self.seed)
+    }
+}
+
+/// Runs `k` on backend `b`, or says why it is skipped (`None`).
+fn on<K: Kernel>(b: Backend, k: K) -> Option<K::Output> {
+    match b.unavailable_reason() {
+        Some(why) => {
+            eprintln!("skipping backend {}: {why}", b.name());
+            None
+        }
+        None => Some(b.run(k).unwrap()),
+    }
+}
+
+/// Stamps the tests out for one lane backend.
 macro_rules! bsp_tests {
-    ($name:ident, $token:expr) => {
+    ($name:ident, $backend:expr) => {
         mod $name {
             use super::*;
+            const B: Backend = $backend;
 
             #[test]
             fn edge_cases() {
-                super::edge_cases($token);
+                on(B, EdgeCases);
             }
 
             #[test]
             fn large_scene() {
-                super::large_scene($token);
+                on(B, LargeScene);
             }
 
             #[test]
             fn moving_instances() {
-                for seed in 0..4 {
-                    super::moving_instances($token, seed);
-                }
+                on(B, MovingInstances);
             }
 
             proptest! {
-                #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
+                #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
 
                 #[test]
                 fn random_scenes_match_brute_force(
@@ -232,23 +297,23 @@ macro_rules! bsp_tests {
                     instances in 0usize..7,
                     preset in 0usize..3,
                 ) {
-                    let l = $token;
-                    let scene = random_scene(seed, tris, meshes, instances);
-                    let rays = random_rays(seed, &scene, 96);
-                    let p = param_sets(lanes_n(l)).swap_remove(preset);
-                    let (bf, bsp) = build_both(&scene, &p);
-                    check_all_queries(l, &bf, &bsp, &rays, seed).map_err(TestCaseError::fail)?;
+                    let k = RandomScene { seed, tris, meshes, instances, preset };
+                    if let Some(r) = on(B, k) {
+                        r.map_err(TestCaseError::fail)?;
+                    }
                 }
             }
         }
     };
 }
 
-fn lanes_n<L: Lanes>(_: L) -> usize {
-    L::N
-}
-
-bsp_tests!(scalar, coherent_simd::scalar::Scalar);
+bsp_tests!(scalar, Backend::Scalar);
+bsp_tests!(sse, Backend::Sse);
+bsp_tests!(wide4, Backend::Wide4);
+bsp_tests!(wide8, Backend::Wide8);
+bsp_tests!(wide16, Backend::Wide16);
+bsp_tests!(pulp8, Backend::Pulp8);
+bsp_tests!(pulp16, Backend::Pulp16);
 
 #[test]
 fn object_presets_differ() {

@@ -1,0 +1,251 @@
+//! Ray workloads for measuring accelerators (paper section 7 times the coherent tracer on
+//! primary, shadow and reflected rays): primary rays in packet-shaped screen tiles, shadow
+//! rays to a point light, diffuse rays over the cosine hemisphere, and timing kernels that run
+//! a workload through any [`Accel`] one ray at a time or in packets of any lane backend.
+
+use std::time::Instant;
+
+use coherent_simd::{Kernel, Lanes, SimdF32, SimdMask};
+use glam::Vec3;
+
+use crate::scenes::View;
+use crate::shapes::Rng;
+use crate::{Accel, Hit1, Ray1, Rays, Scene};
+
+/// The kind of rays in a workload (the `rays` column of `accel.csv`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RayKind {
+    /// From the eye through pixel centres: coherent.
+    Primary,
+    /// From primary hit points to a point light: coherent (common end point), any-hit.
+    Shadow,
+    /// From primary hit points over the cosine-weighted hemisphere: incoherent.
+    Diffuse,
+}
+
+impl RayKind {
+    pub const ALL: [RayKind; 3] = [RayKind::Primary, RayKind::Shadow, RayKind::Diffuse];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            RayKind::Primary => "primary",
+            RayKind::Shadow => "shadow",
+            RayKind::Diffuse => "diffuse",
+        }
+    }
+
+    /// Shadow rays ask for occlusion, the others for the first hit.
+    pub fn occlusion(self) -> bool {
+        self == RayKind::Shadow
+    }
+}
+
+/// The screen tile a packet of `lanes` rays covers: 1x1, 2x2, 4x2, 4x4 (wider: 8 x lanes/8).
+pub fn tile_shape(lanes: usize) -> (u32, u32) {
+    match lanes {
+        0 | 1 => (1, 1),
+        2 => (2, 1),
+        4 => (2, 2),
+        8 => (4, 2),
+        16 => (4, 4),
+        n => (8, (n as u32).div_ceil(8)),
+    }
+}
+
+/// Primary rays of a `width x height` image, ordered tile by tile (`tile_w x tile_h` tiles,
+/// rows of tiles top to bottom), so that consecutive groups of `tile_w * tile_h` rays are
+/// coherent packets. Width and height must be multiples of the tile size.
+pub fn primary_rays(view: &View, width: u32, height: u32, tile: (u32, u32)) -> Vec<Ray1> {
+    let (tw, th) = tile;
+    assert!(
+        width.is_multiple_of(tw) && height.is_multiple_of(th),
+        "image not a whole number of tiles"
+    );
+    let mut rays = Vec::with_capacity((width * height) as usize);
+    for ty in (0..height).step_by(th as usize) {
+        for tx in (0..width).step_by(tw as usize) {
+            for y in ty..ty + th {
+                for x in tx..tx + tw {
+                    rays.push(view.primary_ray(x, y, width, height));
+                }
+            }
+        }
+    }
+    rays
+}
+
+/// The world-space hit point and geometric normal (facing the ray) of `h` on `ray`.
+pub fn hit_frame(scene: &Scene, ray: &Ray1, h: &Hit1) -> (Vec3, Vec3) {
+    let inst = &scene.instances[h.inst as usize];
+    let m = &inst.world_from_object;
+    let [a, b, c] = scene.meshes[inst.mesh]
+        .triangle(h.prim as usize)
+        .map(|p| m.transform_point3(p));
+    let mut n = (b - a).cross(c - a).normalize_or_zero();
+    if n.dot(ray.dir) > 0.0 {
+        n = -n;
+    }
+    (ray.at(h.t), n)
+}
+
+/// A secondary ray origin: `p` pushed off the surface along `n` by a relative epsilon.
+fn offset(p: Vec3, n: Vec3) -> Vec3 {
+    p + n * (1e-4 * p.abs().max_element().max(1.0))
+}
+
+/// Shadow rays from the primary hits (in order; misses give none) to `light`: `t` in
+/// `[0, 1)` reaches the light.
+pub fn shadow_rays<A: Accel>(accel: &A, scene: &Scene, primary: &[Ray1], light: Vec3) -> Vec<Ray1> {
+    primary
+        .iter()
+        .filter_map(|r| {
+            let h = accel.intersect1(r)?;
+            let (p, n) = hit_frame(scene, r, &h);
+            let o = offset(p, n);
+            Some(Ray1::new(o, light - o, 0.0, 1.0))
+        })
+        .collect()
+}
+
+/// Diffuse rays from the primary hits (in order; misses give none), cosine-distributed over
+/// the hemisphere of the geometric normal.
+pub fn diffuse_rays<A: Accel>(accel: &A, scene: &Scene, primary: &[Ray1], seed: u64) -> Vec<Ray1> {
+    let mut rng = Rng::new(seed);
+    primary
+        .iter()
+        .filter_map(|r| {
+            let h = accel.intersect1(r)?;
+            let (p, n) = hit_frame(scene, r, &h);
+            // Cosine-weighted: a point on the unit sphere around the normal's tip.
+            let d = (n + rng.unit_vector()).normalize_or(n);
+            Some(Ray1::infinite(offset(p, n), d))
+        })
+        .collect()
+}
+
+/// What the timers measure.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Clock {
+    /// Wall-clock time.
+    #[default]
+    Wall,
+    /// CPU time of the calling thread (Linux: `/proc/thread-self/schedstat`; elsewhere wall
+    /// time): time-slicing by other processes on a shared machine does not count.
+    ThreadCpu,
+}
+
+impl Clock {
+    /// Seconds since an arbitrary origin.
+    pub fn now(self) -> f64 {
+        static ORIGIN: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
+        let wall = || ORIGIN.get_or_init(Instant::now).elapsed().as_secs_f64();
+        match self {
+            Clock::Wall => wall(),
+            Clock::ThreadCpu => std::fs::read_to_string("/proc/thread-self/schedstat")
+                .ok()
+                .and_then(|s| s.split_whitespace().next()?.parse::<u64>().ok())
+                .map_or_else(wall, |ns| ns as f64 * 1e-9),
+        }
+    }
+}
+
+/// What a timed pass found: rays that hit (or were occluded), and the sum of their `t`
+/// (a checksum; 0 for occlusion).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct PassResult {
+    pub seconds: f64,
+    pub hits: u64,
+    pub t_sum: f64,
+}
+
+/// Times one pass of `rays` one ray at a time (the scalar path): best of `repeats` passes.
+pub fn time_single<A: Accel>(
+    accel: &A,
+    rays: &[Ray1],
+    occlusion: bool,
+    repeats: usize,
+    clock: Clock,
+) -> PassResult {
+    let mut best = PassResult {
+        seconds: f64::INFINITY,
+        ..Default::default()
+    };
+    for _ in 0..repeats.max(1) {
+        let t0 = clock.now();
+        let (mut hits, mut t_sum) = (0u64, 0.0f64);
+        for r in rays {
+            if occlusion {
+                hits += accel.occluded1(r) as u64;
+            } else if let Some(h) = accel.intersect1(r) {
+                hits += 1;
+                t_sum += h.t as f64;
+            }
+        }
+        let s = clock.now() - t0;
+        if s < best.seconds {
+            best = PassResult {
+                seconds: s,
+                hits,
+                t_sum,
+            };
+        }
+    }
+    best
+}
+
+/// Times one pass of `rays` in packets of the backend's width (consecutive rays form a
+/// packet; the last is padded with inactive lanes): best of `repeats` passes. Run it with
+/// [`coherent_simd::Backend::run`]. Packing happens before the clock starts.
+pub struct TimePackets<'a, A: Accel> {
+    pub accel: &'a A,
+    pub rays: &'a [Ray1],
+    pub occlusion: bool,
+    pub repeats: usize,
+    pub clock: Clock,
+}
+
+impl<A: Accel> Kernel for TimePackets<'_, A> {
+    type Output = PassResult;
+
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) -> PassResult {
+        let packets: Vec<(Rays<L>, L::Mask)> = self
+            .rays
+            .chunks(L::N)
+            .map(|c| {
+                let p = Rays::from_fn(l, |i| c[i.min(c.len() - 1)]);
+                (p, l.mask_from_fn(|i| i < c.len()))
+            })
+            .collect();
+        let mut best = PassResult {
+            seconds: f64::INFINITY,
+            ..Default::default()
+        };
+        for _ in 0..self.repeats.max(1) {
+            let t0 = self.clock.now();
+            let mut hits = 0u64;
+            let zero = l.splat(0.0);
+            let mut t_acc = zero;
+            for (p, m) in &packets {
+                if self.occlusion {
+                    hits += self.accel.occluded(l, p, *m).count() as u64;
+                } else {
+                    let h = self.accel.intersect(l, p, *m);
+                    let hm = h.hit_mask(l) & *m;
+                    hits += hm.count() as u64;
+                    t_acc += hm.select(h.t, zero);
+                }
+            }
+            let s = self.clock.now() - t0;
+            let t_sum = (0..L::N).map(|i| t_acc.lane(i) as f64).sum();
+            if s < best.seconds {
+                best = PassResult {
+                    seconds: s,
+                    hits,
+                    t_sum,
+                };
+            }
+        }
+        best
+    }
+}
