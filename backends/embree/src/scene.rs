@@ -296,6 +296,12 @@ impl Embree {
         Ok(())
     }
 
+    /// Sets the COHERENT query flag of later packet queries (on for coherent rays such as
+    /// primary and shadow rays; off for incoherent ones, where Embree is faster without it).
+    pub fn set_coherent(&mut self, on: bool) {
+        self.params.coherent = on;
+    }
+
     /// The parameters the scene was built with.
     pub fn params(&self) -> EmbreeParams {
         self.params
