@@ -116,7 +116,7 @@ fn build_others(
             });
         }
     }
-    let _ = (single, field, moved);
+    let _ = (g, single, field, moved);
 }
 
 fn trace(c: &mut Criterion) {
