@@ -18,19 +18,14 @@ pub use ctx::Ctx;
 pub use experiment::{Experiment, Status};
 
 // The experiments, one module each.
+pub mod accel;
 pub mod kernels;
 
 /// Every experiment, in the order `reproduce` runs them and the README lists them. The
 /// names are the results contract (`--only` takes them).
 pub const EXPERIMENTS: &[Experiment] = &[
     kernels::EXPERIMENT,
-    Experiment::planned(
-        "accel",
-        "traversal speed, build time and memory per accel, ray kind and packet width",
-        "section 3 (two-level BSP)",
-        &["accel.csv"],
-        Some(3),
-    ),
+    accel::EXPERIMENT,
     Experiment::planned(
         "table1",
         "anisotropic tabulated BDF evaluations per backend",
