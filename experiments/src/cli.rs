@@ -224,6 +224,83 @@ mod tests {
         );
     }
 
+    const HEADER: &[&str] = &["a"];
+
+    fn good(ctx: &mut Ctx) -> anyhow::Result<()> {
+        let mut csv = ctx.csv("good.csv", HEADER)?;
+        csv.row(&[&1])?;
+        csv.finish()?;
+        Ok(())
+    }
+
+    fn failing(_: &mut Ctx) -> anyhow::Result<()> {
+        bail!("the mesh is malformed")
+    }
+
+    fn panicking(_: &mut Ctx) -> anyhow::Result<()> {
+        panic!("a bug in an experiment")
+    }
+
+    fn report_good(ctx: &Ctx) -> anyhow::Result<Option<String>> {
+        Ok(ctx
+            .read_csv("good.csv", HEADER)?
+            .map(|t| format!("good rows: {}", t.rows.len())))
+    }
+
+    fn report_none(_: &Ctx) -> anyhow::Result<Option<String>> {
+        Ok(None)
+    }
+
+    fn experiment(name: &'static str, run: crate::experiment::RunFn) -> Experiment {
+        let report = if name == "good" {
+            report_good
+        } else {
+            report_none
+        };
+        Experiment {
+            name,
+            description: name,
+            paper: "—",
+            csv: &[],
+            plots: &[],
+            status: Status::Ready { run, report },
+        }
+    }
+
+    #[test]
+    fn a_failing_experiment_fails_the_run_but_not_the_others() {
+        let registry = [
+            experiment("bad", failing),
+            experiment("buggy", panicking),
+            experiment("good", good),
+        ];
+        let dir = tempfile::tempdir().unwrap();
+        let args = [
+            "reproduce",
+            "--quick",
+            "--out",
+            dir.path().to_str().unwrap(),
+        ];
+        let code = main(args.iter().map(OsString::from), &registry);
+        assert_eq!(code, ExitCode::FAILURE);
+        let readme = std::fs::read_to_string(dir.path().join("README.md")).unwrap();
+        assert!(readme.contains("good rows: 1"), "{readme}");
+        assert!(readme.contains("which ran: good."), "{readme}");
+        assert!(dir.path().join("machine.json").is_file());
+
+        let args = [
+            "reproduce",
+            "--only",
+            "good",
+            "--out",
+            dir.path().to_str().unwrap(),
+        ];
+        assert_eq!(
+            main(args.iter().map(OsString::from), &registry),
+            ExitCode::SUCCESS
+        );
+    }
+
     #[test]
     fn the_default_output_is_the_workspace_results_folder() {
         let out = default_out();

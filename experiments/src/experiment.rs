@@ -1,5 +1,98 @@
 //! An experiment of `reproduce`: one paper item (a table of section 7, or a comparison of the
 //! testbed), its outputs, and the functions that measure it and report it.
+//!
+//! An experiment is one module exporting a `const EXPERIMENT`, listed in
+//! [`crate::EXPERIMENTS`]. `run` measures and writes CSV rows (under the contract's exact
+//! header) and plots; `report` renders the README section from the CSV alone:
+//!
+//! ```
+//! use coherent_experiments::plot::{LineChart, Series};
+//! use coherent_experiments::table::PaperTable;
+//! use coherent_experiments::{Ctx, Experiment, Status};
+//!
+//! const FILE: &str = "table1_bdf.csv";
+//! const HEADER: &[&str] = &["calls", "backend", "lanes", "seconds", "speedup"];
+//!
+//! pub const EXPERIMENT: Experiment = Experiment {
+//!     name: "table1",
+//!     description: "anisotropic tabulated BDF evaluations per backend",
+//!     paper: "Table 1 (section 4.2)",
+//!     csv: &[FILE],
+//!     plots: &["table1_speedup"],
+//!     status: Status::Ready { run, report },
+//! };
+//!
+//! /// The paper's figures, as data (Pentium 4 1.8 GHz, non-SSE vs SSE).
+//! const PAPER: PaperTable = PaperTable {
+//!     caption: "Paper, Table 1 (Pentium 4 1.8 GHz) beside ours (scalar vs sse):",
+//!     key: "calls",
+//!     columns: &["scalar s", "SSE s", "speedup"],
+//!     rows: &[
+//!         ("100000", &[0.137, 0.040, 3.43]),
+//!         ("200000", &[0.248, 0.078, 3.17]),
+//!         ("400000", &[0.495, 0.156, 3.17]),
+//!     ],
+//! };
+//!
+//! fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
+//!     let sizes: Vec<usize> = ctx.pick(vec![10_000], vec![100_000, 200_000, 400_000]);
+//!     let mut csv = ctx.csv(FILE, HEADER)?;
+//!     let bar = ctx.progress(sizes.len() as u64, "table1");
+//!     let mut points = Vec::new();
+//!     for &calls in &sizes {
+//!         // Real experiments loop over `coherent::simd::Backend::available()` and time a
+//!         // `Kernel` through `backend.run(kernel)`.
+//!         let scalar = ctx.time(|| (0..calls).map(|i| (i as f32).sqrt()).sum::<f32>());
+//!         csv.row(&[&calls, &"scalar", &1, &scalar.median, &1.0])?;
+//!         points.push((1.0, 1.0));
+//!         bar.inc(1);
+//!     }
+//!     bar.finish_and_clear();
+//!     csv.finish()?;
+//!     ctx.line_chart(
+//!         "table1_speedup",
+//!         &LineChart {
+//!             title: "Table 1: BDF speedup over scalar".into(),
+//!             x_label: "lanes".into(),
+//!             y_label: "speedup".into(),
+//!             series: vec![Series::new("bdf", points)],
+//!             log2_x: true,
+//!         },
+//!     )?;
+//!     Ok(())
+//! }
+//!
+//! fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
+//!     let Some(table) = ctx.read_csv(FILE, HEADER)? else {
+//!         return Ok(None); // not run into this folder yet
+//!     };
+//!     let mut ours = Vec::new();
+//!     for calls in table.distinct("calls")? {
+//!         let rows = table.rows_where("calls", &calls)?;
+//!         let seconds = |backend: &str| -> Option<f64> {
+//!             let r = rows.iter().find(|&&r| table.get(r, "backend").ok() == Some(backend))?;
+//!             table.f64(*r, "seconds").ok()
+//!         };
+//!         let (scalar, sse) = (seconds("scalar"), seconds("sse"));
+//!         let speedup = scalar.zip(sse).map(|(a, b)| a / b);
+//!         ours.push((calls, vec![scalar, sse, speedup]));
+//!     }
+//!     let mut md = PAPER.beside(&ours);
+//!     md.push_str("\nAll backends (speedup over scalar):\n\n");
+//!     md.push_str(&table.pivot("calls", "backend", "speedup")?);
+//!     md.push_str(&ctx.plot_markdown("table1_speedup", "BDF speedup").unwrap_or_default());
+//!     Ok(Some(md))
+//! }
+//!
+//! // Try it in a temporary folder:
+//! let dir = tempfile::tempdir()?;
+//! let mut ctx = Ctx::new(dir.path(), true, coherent::machine::Machine::detect());
+//! let Status::Ready { run, report } = EXPERIMENT.status else { unreachable!() };
+//! run(&mut ctx)?;
+//! let section = report(&ctx)?.expect("the CSV is there");
+//! assert!(section.contains("| 10000 | — | "));
+//! # Ok::<(), anyhow::Error>(())
+//! ```
 
 use crate::ctx::Ctx;
 

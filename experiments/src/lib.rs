@@ -3,8 +3,8 @@
 //! ([`Ctx`]), CSV tables, timing, plots and the generated `README.md`.
 //!
 //! Adding an experiment: write a module exporting `pub const EXPERIMENT: Experiment`
-//! (see [`experiment`]), declare it below and put it in [`EXPERIMENTS`] in place of its
-//! `Experiment::planned` line.
+//! (see [`experiment`] for a complete example), declare it below and put it in
+//! [`EXPERIMENTS`] in place of its `Experiment::planned` line.
 
 pub mod cli;
 pub mod ctx;
@@ -16,6 +16,9 @@ pub mod timing;
 
 pub use ctx::Ctx;
 pub use experiment::{Experiment, Status};
+pub use plot::{BarChart, LineChart, Series};
+pub use table::{PaperTable, Table};
+pub use timing::{Timing, speedup};
 
 // The experiments, one module each.
 pub mod accel;

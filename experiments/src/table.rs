@@ -174,6 +174,40 @@ impl Table {
         Ok(seen)
     }
 
+    /// A cross table in Markdown: one row per value of column `rows`, one column per value of
+    /// column `cols` (both in order of first appearance), cells from column `value` (numbers
+    /// through [`fmt_num`]; `—` where no row matches). E.g. `pivot("kernel", "backend",
+    /// "speedup")` gives kernels down, backends across.
+    pub fn pivot(&self, rows: &str, cols: &str, value: &str) -> anyhow::Result<String> {
+        let (r, c, v) = (self.col(rows)?, self.col(cols)?, self.col(value)?);
+        let row_keys = self.distinct(rows)?;
+        let col_keys = self.distinct(cols)?;
+        let cell = |rk: &str, ck: &str| {
+            self.rows
+                .iter()
+                .find(|row| row[r] == rk && row[c] == ck)
+                .map_or_else(
+                    || "—".to_owned(),
+                    |row| match row[v].trim().parse::<f64>() {
+                        Ok(x) if !is_integer(&row[v]) => fmt_num(x),
+                        _ => row[v].clone(),
+                    },
+                )
+        };
+        let body: Vec<Vec<String>> = row_keys
+            .iter()
+            .map(|rk| {
+                std::iter::once(rk.clone())
+                    .chain(col_keys.iter().map(|ck| cell(rk, ck)))
+                    .collect()
+            })
+            .collect();
+        let header: Vec<&str> = std::iter::once(rows)
+            .chain(col_keys.iter().map(String::as_str))
+            .collect();
+        Ok(markdown_table(&header, &body))
+    }
+
     /// The whole table as Markdown. A column of numbers where any has a fraction (`0.5`,
     /// `1e-3`, `inf`) is printed with [`fmt_num`]; integer and text columns stay as written.
     pub fn to_markdown(&self) -> String {
@@ -419,6 +453,25 @@ mod tests {
         assert_eq!(lines[4], "| 100000 | 0.137 | — | 3.43 | — |");
         assert_eq!(lines[5], "| 200000 | 0.248 | 0.0100 | 3.17 | 8.00 |");
         assert_eq!(lines[6], "| 800000 | — | 0.0400 | — | — |");
+    }
+
+    #[test]
+    fn pivot_puts_one_column_across() {
+        let table = Table {
+            file: PathBuf::from("k.csv"),
+            header: vec!["kernel".into(), "backend".into(), "speedup".into()],
+            rows: vec![
+                vec!["exp".into(), "scalar".into(), "1".into()],
+                vec!["exp".into(), "sse".into(), "3.912".into()],
+                vec!["log".into(), "scalar".into(), "1".into()],
+            ],
+        };
+        let md = table.pivot("kernel", "backend", "speedup").unwrap();
+        assert_eq!(
+            md,
+            "| kernel | scalar | sse |\n| --- | --- | --- |\n| exp | 1 | 3.91 |\n| log | 1 | — |\n"
+        );
+        assert!(table.pivot("kernel", "nope", "speedup").is_err());
     }
 
     #[test]

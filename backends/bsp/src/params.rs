@@ -97,7 +97,14 @@ pub struct TopParams {
     pub empty_bonus: f32,
     /// 0 picks `8 + 1.3 log2(N)`.
     pub max_depth: u32,
+    /// Nodes with at most this many instances become leaves.
+    pub leaf_size: u32,
 }
+
+// Measured (`trace top` / `trace spheres`, 1,025 instances, thread CPU / wall on the 2-core
+// dev machine): leaf size 1 rebuilt in 1.29 ms, 2 in 0.69 ms, 4 in 0.35 ms, with primary-ray
+// speed unchanged within noise (single 3.7-3.8, pulp16 8.8-9.0 Mrays/s); 8 bins instead of 16
+// saved less (0.82 ms). Default: 16 bins, leaf size 4.
 
 impl Default for TopParams {
     fn default() -> Self {
@@ -107,6 +114,7 @@ impl Default for TopParams {
             intersection_cost: 60.0,
             empty_bonus: 0.2,
             max_depth: 0,
+            leaf_size: 4,
         }
     }
 }
@@ -152,13 +160,15 @@ impl BspParams {
 }
 
 /// The measured best active-lane count at or below which a packet's subtree is traversed ray
-/// by ray, per packet width. Filled in from the `accel` experiment's threshold sweep (see
-/// the crate README / results).
-pub fn default_single_ray_threshold(lanes: usize) -> u32 {
-    match lanes {
-        0..=1 => 0,
-        2..=4 => 1,
-        5..=8 => 1,
-        _ => 2,
-    }
+/// by ray, per packet width: 0 (never) at every width.
+///
+/// Measured by the `accel` experiment's sweep (`accel_threshold.csv`, thresholds 0 to
+/// width / 2, primary and diffuse rays, `room` and `blob`): 0 was best or within noise of the
+/// best everywhere, e.g. room primary at 256x192 (quick): width 4 (sse) 15.5 / 14.6 / 13.0
+/// Mrays/s for thresholds 0 / 1 / 2, width 16 (pulp16) 34.4 / 33.1 / 30.4 / 28.0 / 25.8 for
+/// 0 to 4. A kd-tree packet step with one active lane costs about what a single-ray step
+/// costs (a split test and a branch), while each switch pays for unpacking the lane, three
+/// divisions and a fresh mailbox, and switched subtrees are mostly small.
+pub fn default_single_ray_threshold(_lanes: usize) -> u32 {
+    0
 }

@@ -343,14 +343,32 @@ pub(crate) fn scene_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
         return;
     }
     let mut wr = RaysX::new(l, &rays.origin, &rays.dir, rays.tmin);
-    // The scene box first: lanes that miss it are done.
+    // The scene box first (or the object's, with a single top leaf): lanes that miss it are
+    // done.
+    let thr = bsp.params.threshold_for(L::N);
+    let neg = sign_bits(l, &rays.dir);
+    let root = bsp.top.nodes[0];
+    if root.is_leaf() {
+        // Few instances: no top-level walk, each instance's box test culls.
+        sign_groups(
+            l,
+            m,
+            neg,
+            #[inline(always)]
+            |g, signs| {
+                wr.signs = signs;
+                for &i in &bsp.top.items[root.items()] {
+                    enter_instance(l, bsp, i, rays, &wr, g, thr, q, c);
+                }
+            },
+        );
+        return;
+    }
     let (t0, t1) = clip_box(l, &bsp.top.bounds, &wr.o, &wr.inv, rays.tmin, q.limit());
     let m = m & t0.le(t1);
     if m.none() {
         return;
     }
-    let thr = bsp.params.threshold_for(L::N);
-    let neg = sign_bits(l, &rays.dir);
     sign_groups(
         l,
         m,

@@ -188,6 +188,17 @@ pub(crate) fn scene1<Q: Query1, C: Counters>(
     c: &mut C,
 ) {
     let r = Ray1x::new(o, d, tmin);
+    let enter = |q: &mut Q, c: &mut C, i: u32| enter1(bsp, &r, (o, d), i, q, c);
+    let root = bsp.top.nodes[0];
+    if root.is_leaf() {
+        // Few instances: no top-level walk, each instance's box test culls.
+        for &i in &bsp.top.items[root.items()] {
+            if enter(q, c, i) {
+                return;
+            }
+        }
+        return;
+    }
     let Some((t0, t1)) = r.clip(&bsp.top.bounds, q.limit()) else {
         return;
     };
@@ -205,26 +216,39 @@ pub(crate) fn scene1<Q: Query1, C: Counters>(
         #[inline(always)]
         |q, c, items| {
             for &i in items {
-                if seen.seen(i) {
-                    continue;
-                }
-                let inst = &bsp.instances[i as usize];
-                let mesh = &bsp.meshes[inst.mesh as usize];
-                c.instance(1);
-                let done = if inst.identity {
-                    mesh1(mesh, &r, i, None, bsp.params.mailbox, q, c)
-                } else {
-                    let m = &inst.object_from_world;
-                    let ro = Ray1x::new(transform_point1(m, o), transform_vector1(m, d), tmin);
-                    mesh1(mesh, &ro, i, None, bsp.params.mailbox, q, c)
-                };
-                if done {
+                if !seen.seen(i) && enter(q, c, i) {
                     return true;
                 }
             }
             false
         },
     );
+}
+
+/// Instance `i` for the world-space ray `r` (`od`: its origin and direction).
+#[inline(always)]
+fn enter1<Q: Query1, C: Counters>(
+    bsp: &Bsp,
+    r: &Ray1x,
+    od: (Vec3, Vec3),
+    i: u32,
+    q: &mut Q,
+    c: &mut C,
+) -> bool {
+    let inst = &bsp.instances[i as usize];
+    let mesh = &bsp.meshes[inst.mesh as usize];
+    c.instance(1);
+    if inst.identity {
+        mesh1(mesh, r, i, None, bsp.params.mailbox, q, c)
+    } else {
+        let m = &inst.object_from_world;
+        let ro = Ray1x::new(
+            transform_point1(m, od.0),
+            transform_vector1(m, od.1),
+            r.tmin,
+        );
+        mesh1(mesh, &ro, i, None, bsp.params.mailbox, q, c)
+    }
 }
 
 /// One lane of a packet continuing ray by ray in a mesh subtree.
