@@ -10,6 +10,11 @@ pub use coherent_embree as embree;
 #[cfg(feature = "obvhs")]
 pub use coherent_obvhs as obvhs;
 
+pub mod approx;
+pub mod bdf;
 pub mod kernels;
 pub mod machine;
+pub mod material;
 pub mod mesh_file;
+pub mod tabulated;
+pub mod texture;

@@ -1,5 +1,6 @@
 //! Experiment `kernels`: the approximations of sections 4.2, 5 and 6.1 (exp, log, pow, acos,
-//! atan2) timed on every lane backend usable here, and their measured error against `std`.
+//! atan2) and trilinear texture lookups (section 4.1) timed on every lane backend usable here,
+//! and the approximations' measured error against `std`.
 //!
 //! Protocol: each kernel maps a 16,384-value input (coherent, like neighbouring pixels:
 //! see `coherent::kernels::approx_inputs`) through the approximation; one *sample* is
@@ -11,7 +12,12 @@ use std::collections::BTreeMap;
 
 use coherent::kernels::{ApproxKernel, approx_inputs};
 use coherent::simd::approx::{Approx, Bound};
+use coherent::simd::scalar::Scalar;
 use coherent::simd::{Backend, Kernel, Lanes};
+use coherent::texture::Texture;
+use coherent::texture::workload::{
+    LodMethod, TextureInputs, TextureLookups, lod_at, pattern_texture,
+};
 
 use crate::ctx::Ctx;
 use crate::experiment::{Experiment, Status};
@@ -23,7 +29,7 @@ pub const EXPERIMENT: Experiment = Experiment {
     name: "kernels",
     description: "the approximations (exp, log, pow, acos, atan2) per lane backend",
     paper: "sections 4.2, 5 and 6.1 (the SSE approximations)",
-    csv: &["kernels.csv", "kernels_accuracy.csv"],
+    csv: &["kernels.csv", "kernels_accuracy.csv", "texture_lod.csv"],
     plots: &["kernels_speedup_vs_lanes", "kernels_speedup"],
     status: Status::Ready { run, report },
 };
@@ -75,6 +81,34 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
             bar.inc(1);
         }
     }
+    // The texture kernel (section 4.1): trilinear lookups of a 1024 x 1024 mipmapped texture
+    // from a floor seen by a pinhole camera, the mip level by successive halving (the
+    // paper's) or from ray differentials.
+    let texture = pattern_texture(1024);
+    let tex_inputs = TextureInputs::floor(ctx.pick(256, 512), 1024);
+    let mut tex_seconds: BTreeMap<(LodMethod, Backend), Vec<f64>> = BTreeMap::new();
+    for (method, _) in TEXTURE_KERNELS {
+        let tex_sample = |backend: Backend| -> anyhow::Result<f64> {
+            let start = std::time::Instant::now();
+            std::hint::black_box(backend.run(TextureLookups {
+                texture: &texture,
+                inputs: &tex_inputs,
+                lookups: passes * VALUES,
+                lod: method,
+            })?);
+            Ok(start.elapsed().as_secs_f64())
+        };
+        for &backend in &backends {
+            tex_sample(backend)?; // warm-up
+        }
+        for _ in 0..samples {
+            for &backend in &backends {
+                let s = tex_sample(backend)?;
+                tex_seconds.entry((method, backend)).or_default().push(s);
+            }
+        }
+    }
+    texture_lod(ctx, &texture, &tex_inputs)?;
     bar.finish_and_clear();
 
     let scale = PER / (passes * VALUES) as f64;
@@ -85,6 +119,19 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
             let s = median(&seconds[&(f, backend)]) * scale;
             csv.row(&[
                 &f.name(),
+                &backend.name(),
+                &backend.lanes(),
+                &format!("{s:.6e}"),
+                &format!("{:.3}", speedup(scalar, s)),
+            ])?;
+        }
+    }
+    for (method, name) in TEXTURE_KERNELS {
+        let scalar = median(&tex_seconds[&(method, Backend::Scalar)]) * scale;
+        for &backend in &backends {
+            let s = median(&tex_seconds[&(method, backend)]) * scale;
+            csv.row(&[
+                &name,
                 &backend.name(),
                 &backend.lanes(),
                 &format!("{s:.6e}"),
@@ -114,6 +161,51 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     acc.finish()?;
 
     plots(ctx)?;
+    Ok(())
+}
+
+/// The texture kernels: the mip level by the paper's halving, and from ray differentials.
+const TEXTURE_KERNELS: [(LodMethod, &str); 2] = [
+    (LodMethod::Halving, "texture_trilinear"),
+    (LodMethod::Differentials, "texture_trilinear_differentials"),
+];
+
+const LOD_HEADER: &[&str] = &[
+    "lookups",
+    "mean_lod_halving",
+    "mean_lod_differentials",
+    "mean_abs_difference",
+    "max_abs_difference",
+    "share_halving_finer",
+];
+
+/// The two ways of choosing the mip level compared on the texture kernel's lookups
+/// (`texture_lod.csv`): halving the hit distance sees only the distance, the
+/// differentials also the slant of the floor.
+fn texture_lod(ctx: &Ctx, texture: &Texture, inputs: &TextureInputs) -> anyhow::Result<()> {
+    let l = Scalar;
+    let (mut sum_h, mut sum_d, mut sum_abs, mut max_abs, mut finer) =
+        (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0usize);
+    for i in 0..inputs.len() {
+        let h = lod_at(l, texture, inputs, LodMethod::Halving, i) as f64;
+        let d = lod_at(l, texture, inputs, LodMethod::Differentials, i) as f64;
+        sum_h += h;
+        sum_d += d;
+        sum_abs += (h - d).abs();
+        max_abs = max_abs.max((h - d).abs());
+        finer += (h < d - 0.5) as usize;
+    }
+    let n = inputs.len().max(1) as f64;
+    let mut csv = ctx.csv("texture_lod.csv", LOD_HEADER)?;
+    csv.row(&[
+        &inputs.len(),
+        &format!("{:.3}", sum_h / n),
+        &format!("{:.3}", sum_d / n),
+        &format!("{:.3}", sum_abs / n),
+        &format!("{max_abs:.3}"),
+        &format!("{:.3}", finer as f64 / n),
+    ])?;
+    csv.finish()?;
     Ok(())
 }
 
@@ -267,7 +359,11 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
          [-14, 0] (73% in the table part), log on (1e-6, 1] (17% in the table part), pow on \
          [0, 64] with y = 1/2.2 through the paper's range reduction, acos on [-1, 1], atan2 on \
          [-1, 1]^2. Issue 2's targets for exp/log/pow: sse >= 3.5x, 8 lanes >= 6x, 16 lanes >= \
-         10x.\n\n",
+         10x. `texture_trilinear` (section 4.1): trilinear lookups in a 1024 x 1024 mipmapped \
+         RGB texture at the texture coordinates of a floor seen by a pinhole camera (4 x 4 pixel \
+         tiles), the mip level chosen per lane by successive halving of the hit distance (the \
+         paper's way); `texture_trilinear_differentials` chooses it from ray differentials \
+         instead (compared below).\n\n",
     );
     // One row per kernel, one column per backend: "seconds (speedup x)".
     let backends = t.distinct("backend")?;
@@ -307,6 +403,17 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
              and checked by the tests.\n\n",
         );
         md.push_str(&acc.to_markdown());
+    }
+    if let Some(lod) = ctx.read_csv("texture_lod.csv", LOD_HEADER)? {
+        md.push_str(
+            "\nMip levels of the texture kernel's lookups (`texture_lod.csv`): the paper's \
+             successive halving of the hit distance against the level from ray differentials. \
+             Halving sees the distance only, so on a slanted floor it picks finer levels than \
+             the footprint needs (`share_halving_finer`: more than half a level finer, which \
+             aliases); within one octave its linear fraction differs from `log2` by at most \
+             0.086 levels.\n\n",
+        );
+        md.push_str(&lod.to_markdown());
     }
     Ok(Some(md))
 }

@@ -23,19 +23,14 @@ pub use timing::{Timing, speedup};
 // The experiments, one module each.
 pub mod accel;
 pub mod kernels;
+pub mod table1;
 
 /// Every experiment, in the order `reproduce` runs them and the README lists them. The
 /// names are the results contract (`--only` takes them).
 pub const EXPERIMENTS: &[Experiment] = &[
     kernels::EXPERIMENT,
     accel::EXPERIMENT,
-    Experiment::planned(
-        "table1",
-        "anisotropic tabulated BDF evaluations per backend",
-        "Table 1 (section 4.2)",
-        &["table1_bdf.csv"],
-        Some(5),
-    ),
+    table1::EXPERIMENT,
     Experiment::planned(
         "table2",
         "light source evaluation per light type and backend",
