@@ -75,6 +75,9 @@ pub struct Axis {
     /// padded with a last 0 to the length of `nodes` (so that both gathers with the same
     /// index share their range check).
     inv_widths: Vec<f32>,
+    /// `nodes` and `inv_widths` interleaved (`[n0, inv0, n1, inv1, ...]`), so that one
+    /// 64-bit gather per lane reads a probed node and its cell's reciprocal width.
+    node_invs: Vec<f32>,
     /// The sequence of step sizes of the fixed-length binary search.
     halves: Vec<i32>,
 }
@@ -130,9 +133,15 @@ impl Axis {
             // a lane's lower bound 0) keeps the search code free of a special case.
             halves.push(0);
         }
+        let node_invs = nodes
+            .iter()
+            .zip(&inv_widths)
+            .flat_map(|(&n, &inv)| [n, inv])
+            .collect();
         Ok(Self {
             nodes,
             inv_widths,
+            node_invs,
             halves,
         })
     }
@@ -176,6 +185,69 @@ impl Axis {
     /// N-wide binary search.
     #[inline(always)]
     pub fn locate<L: Lanes>(&self, l: L, x: L::F32s) -> Cell<L> {
+        // One lane, and the 4-lane packets of SSE2-level backends (a select is three
+        // instructions there and packets of 4 mostly share each axis's cell): read the
+        // lower node back once after the search. Wider packets carry it (see below).
+        if L::N <= 4 {
+            return self.locate_coherent(l, x);
+        }
+        // Wider packets: the search carries each lane's lower node and reciprocal width along
+        // with its index (a select each per step), so that no lane needs reading back
+        // and no data-dependent branch is taken after the search.
+        let h = &self.halves;
+        let n = |i: i32| l.splat(self.nodes[i as usize]);
+        let w = |i: i32| l.splat(self.inv_widths[i as usize]);
+        let mut base = l.splat_i32(0);
+        let mut lower = n(0);
+        let mut inv = w(0);
+        // Level 1: one node for every lane.
+        let hit0 = n(h[0]).le(x);
+        base = hit0.select_i32(l.splat_i32(h[0]), base);
+        lower = hit0.select(n(h[0]), lower);
+        inv = hit0.select(w(h[0]), inv);
+        if h.len() > 1 {
+            // Level 2: two candidate nodes, picked by level 1's outcome.
+            let probe = hit0.select(n(h[0] + h[1]), n(h[1]));
+            let probe_inv = hit0.select(w(h[0] + h[1]), w(h[1]));
+            let hit1 = probe.le(x);
+            base = hit1.select_i32(base + l.splat_i32(h[1]), base);
+            lower = hit1.select(probe, lower);
+            inv = hit1.select(probe_inv, inv);
+            if h.len() > 2 {
+                // Level 3: four candidates.
+                let probe = hit0.select(
+                    hit1.select(n(h[0] + h[1] + h[2]), n(h[0] + h[2])),
+                    hit1.select(n(h[1] + h[2]), n(h[2])),
+                );
+                let probe_inv = hit0.select(
+                    hit1.select(w(h[0] + h[1] + h[2]), w(h[0] + h[2])),
+                    hit1.select(w(h[1] + h[2]), w(h[2])),
+                );
+                let hit2 = probe.le(x);
+                base = hit2.select_i32(base + l.splat_i32(h[2]), base);
+                lower = hit2.select(probe, lower);
+                inv = hit2.select(probe_inv, inv);
+                // Further levels gather the probed node and its width per lane, one
+                // 64-bit gather for both.
+                for &half in &h[3..] {
+                    let probe = base + l.splat_i32(half);
+                    let (node, node_inv) = l.gather2(&self.node_invs, probe + probe);
+                    let hit = node.le(x);
+                    base = hit.select_i32(probe, base);
+                    lower = hit.select(node, lower);
+                    inv = hit.select(node_inv, inv);
+                }
+            }
+        }
+        let t = ((x - lower) * inv).clamp(l.splat(0.0), l.splat(1.0));
+        Cell { index: base, t }
+    }
+
+    /// [`Axis::locate`] as used for one lane and packets of 4: find the index, then read
+    /// its node once when every lane shares it (gather it otherwise). Gives the same cells
+    /// and weights.
+    #[inline(always)]
+    pub fn locate_coherent<L: Lanes>(&self, l: L, x: L::F32s) -> Cell<L> {
         let h = &self.halves;
         let n = |i: i32| l.splat(self.nodes[i as usize]);
         let mut base = l.splat_i32(0);
@@ -362,10 +434,6 @@ impl<const D: usize> Grid<D> {
                 .mul_add(l.splat(self.strides[k] as f32), base);
         }
         let base = base.to_i32();
-        let mut corners = [base; 16];
-        for c in 0..1 << D {
-            corners[c] = base + l.splat_i32(self.corner_offsets[c]);
-        }
         // Coherent packets fall in few cells (Table 1's packets of 16: one cell in half of
         // them, at most three in 96%): then each cell's 2^D nodes are read once, splatted
         // and selected into its lanes, instead of gathered lane by lane. More cells than
@@ -389,20 +457,31 @@ impl<const D: usize> Grid<D> {
         for c in 0..channels {
             let plane = &self.planes[c * self.nodes..(c + 1) * self.nodes];
             // The 2^D corners, lerped down one axis at a time, last axis first (corner bit
-            // 0 is the last axis).
+            // 0 is the last axis, so corners `2p` and `2p + 1` are neighbouring nodes:
+            // one read serves both).
             let mut v = [l.splat(0.0); 16];
             if splat {
-                for corner in 0..1 << D {
-                    let off = self.corner_offsets[corner] as usize;
-                    let mut x = l.splat(plane[bases[0] + off]);
+                for pair in 0..1 << (D - 1) {
+                    let off = self.corner_offsets[2 * pair] as usize;
+                    let at = bases[0] + off;
+                    let block = &plane[at..at + 2];
+                    let mut lo = l.splat(block[0]);
+                    let mut hi = l.splat(block[1]);
                     for j in 1..cells_seen {
-                        x = masks[j].select(l.splat(plane[bases[j] + off]), x);
+                        let at = bases[j] + off;
+                        let block = &plane[at..at + 2];
+                        lo = masks[j].select(l.splat(block[0]), lo);
+                        hi = masks[j].select(l.splat(block[1]), hi);
                     }
-                    v[corner] = x;
+                    v[2 * pair] = lo;
+                    v[2 * pair + 1] = hi;
                 }
             } else {
-                for corner in 0..1 << D {
-                    v[corner] = l.gather(plane, corners[corner]);
+                for pair in 0..1 << (D - 1) {
+                    let corner = base + l.splat_i32(self.corner_offsets[2 * pair]);
+                    let (lo, hi) = l.gather2(plane, corner);
+                    v[2 * pair] = lo;
+                    v[2 * pair + 1] = hi;
                 }
             }
             let mut n = 1usize << D;

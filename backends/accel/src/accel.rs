@@ -17,7 +17,12 @@ use crate::{AccelError, Hit1, Hits, Instance, Ray1, Rays, Scene};
 /// - hits name the triangle by its index in its mesh's `indices` and the instance by its
 ///   index in the scene's `instances`;
 /// - when two triangles are hit at the same `t` (a shared edge, coplanar overlap), which one
-///   is reported is unspecified.
+///   is reported is unspecified;
+/// - a hit within [`crate::EDGE_EPS`] (barycentric) of a triangle's edge, inside or in the
+///   tolerance band the projection test accepts beyond the edge for watertightness, may be
+///   missed: accelerators reference a triangle in the cells its exact shape reaches, and
+///   rounding decides on which side of an edge such a hit truly is. Hits farther inside are
+///   always found (watertightness is measured by `backends/bsp/tests/watertight.rs`).
 ///
 /// The packet forms have default implementations that loop over the active lanes and call
 /// the single-ray forms; accelerators with real packet traversal override them.

@@ -20,6 +20,7 @@ pub mod ray;
 pub mod scene;
 pub mod scenes;
 pub mod shapes;
+pub mod testing;
 pub mod triangle;
 pub mod workload;
 
@@ -32,4 +33,4 @@ pub use mesh::Mesh;
 pub use packet::{Hits, Rays, Vec3s};
 pub use ray::{Hit1, Ray1, transform_point1, transform_vector1};
 pub use scene::Scene;
-pub use triangle::{EDGE_EPS, TriAccel};
+pub use triangle::{EDGE_EPS, MIN_THINNESS, TriAccel};

@@ -26,11 +26,12 @@ pub struct MeshTree {
 impl MeshTree {
     /// Builds the tree of one mesh's positions and triangles (validated).
     ///
-    /// The tree is built over each triangle grown about its centroid by
-    /// [`HIT_REGION_SCALE`]: the projection test accepts points up to
-    /// [`coherent_accel::EDGE_EPS`] outside the edges, and the leaves must hold every triangle
-    /// whose accepted region reaches them, or a ray could hit a triangle in a leaf that does
-    /// not list it and the traversal would miss that hit.
+    /// The tree is built over the exact triangles, not over the band of
+    /// [`coherent_accel::EDGE_EPS`] the projection test also accepts beyond their edges: so a
+    /// hit in that band can be missed when the ray visits no leaf of the triangle (the
+    /// [`Accel`] contract allows it). Growing the triangles instead (tried: by `1 + 4 EDGE_EPS`
+    /// about the centroid) made every box face straddle its neighbours' planes, so a box's 12
+    /// triangles stayed in one leaf (13.8 triangle tests per primary ray in `room`).
     pub fn build(positions: &[Vec3], indices: &[[u32; 3]], p: &crate::SahParams) -> Self {
         let mut tris = Vec::with_capacity(indices.len());
         let mut verts = Vec::with_capacity(indices.len());
@@ -38,7 +39,7 @@ impl MeshTree {
             let v = t.map(|j| positions[j as usize]);
             if let Some(rec) = TriAccel::new(v, i as u32) {
                 tris.push(rec);
-                verts.push(hit_region(v));
+                verts.push(v);
             }
         }
         Self {
@@ -51,30 +52,6 @@ impl MeshTree {
     pub fn memory_bytes(&self) -> usize {
         self.tree.memory_bytes() + self.tris.len() * size_of::<TriAccel>()
     }
-}
-
-/// How much a triangle is grown about its centroid for the build. The test's accepted region
-/// `u, v, 1 - u - v >= -EDGE_EPS` is the triangle scaled by `1 + 3 EDGE_EPS`; one more
-/// `EDGE_EPS` covers the rounding of the hit point.
-pub const HIT_REGION_SCALE: f64 = 1.0 + 4.0 * coherent_accel::EDGE_EPS as f64;
-
-/// Triangle `v` grown by [`HIT_REGION_SCALE`] about its centroid, rounded away from it.
-fn hit_region(v: [Vec3; 3]) -> [Vec3; 3] {
-    let d = v.map(|p| p.as_dvec3());
-    let c = (d[0] + d[1] + d[2]) / 3.0;
-    d.map(|p| {
-        let g = c + (p - c) * HIT_REGION_SCALE;
-        Vec3::from_array([0, 1, 2].map(|k| {
-            let f = g[k] as f32;
-            if (f as f64) < g[k] && g[k] > c[k] {
-                f.next_up()
-            } else if (f as f64) > g[k] && g[k] < c[k] {
-                f.next_down()
-            } else {
-                f
-            }
-        }))
-    })
 }
 
 /// An instance as the traversal needs it.

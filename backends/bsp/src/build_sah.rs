@@ -284,12 +284,22 @@ impl Builder<'_> {
                 let ps = count(&mut i, START);
                 nr -= pp + pe;
                 let pos = unordered(pk as u32);
-                if pos > vmin && pos < vmax {
+                let inside = pos > vmin && pos < vmax;
+                // A plane on the voxel's boundary is useful only to cut off the planar
+                // triangles lying in it into a flat child (the faces of a box: without
+                // this, a box's 12 triangles stay in one leaf, tested by every ray).
+                let on_min = pp > 0 && pos == vmin;
+                let on_max = pp > 0 && pos == vmax;
+                if inside || on_min || on_max {
                     let pl = 2.0 * (ab + a_b * (pos - vmin)) * inv_area;
                     let pr = 2.0 * (ab + a_b * (vmax - pos)) * inv_area;
                     let cl = sah(pl, pr, nl + pp, nr);
                     let cr = sah(pl, pr, nl, nr + pp);
-                    let (cost, planar_left) = if cl <= cr { (cl, true) } else { (cr, false) };
+                    let (cost, planar_left) = if on_min || (inside && cl <= cr) {
+                        (cl, true)
+                    } else {
+                        (cr, false)
+                    };
                     if best.as_ref().is_none_or(|b| cost < b.cost) {
                         best = Some(Plane {
                             axis: k,
@@ -430,5 +440,25 @@ mod tests {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod box_tests {
+    use super::*;
+
+    /// A box's faces are cut off into flat leaves, not left in one 12-triangle leaf.
+    #[test]
+    fn box_faces_are_separated() {
+        let m = coherent_accel::shapes::cuboid("box", Vec3::ZERO, Vec3::new(10.0, 8.0, 3.0));
+        let t = crate::MeshTree::build(&m.positions, &m.indices, &SahParams::default()).tree;
+        let biggest = t
+            .nodes
+            .iter()
+            .filter(|n| n.is_leaf())
+            .map(|n| n.items().len())
+            .max()
+            .unwrap();
+        assert!(biggest <= 2, "{:?} {:?}", t.stats, t.nodes);
     }
 }

@@ -15,7 +15,7 @@ use crate::counters::Counters;
 use crate::mailbox::MailboxP;
 use crate::query::QueryP;
 use crate::stack::Stack;
-use crate::walk1::{MeshTask, Ray1x};
+use crate::walk1::{MeshTask, Ray1x, SLACK};
 
 /// A subtree still to visit: node, per-lane segment, lanes.
 #[derive(Clone, Copy)]
@@ -82,7 +82,19 @@ pub(crate) fn clip_box<L: Lanes>(
         t0 = lo.max(t0);
         t1 = hi.min(t1);
     }
-    (t0, t1)
+    (widen_lo(l, t0), widen_hi(l, t1))
+}
+
+/// `x` moved down by [`SLACK`] relative, per lane.
+#[inline(always)]
+fn widen_lo<L: Lanes>(l: L, x: L::F32s) -> L::F32s {
+    x - x.abs() * l.splat(SLACK)
+}
+
+/// `x` moved up by [`SLACK`] relative, per lane.
+#[inline(always)]
+fn widen_hi<L: Lanes>(l: L, x: L::F32s) -> L::F32s {
+    x + x.abs() * l.splat(SLACK)
 }
 
 /// Bitmasks of the lanes whose direction is negative along x, y, z.
@@ -175,12 +187,12 @@ pub(crate) fn walk<L: Lanes, S, C: Counters>(
                 } else {
                     stack.push(Entry {
                         node: far as u32,
-                        tn: ts.max(tn),
+                        tn: widen_lo(l, ts.max(tn)),
                         tf,
                         m: go_far,
                     });
                     node = near;
-                    tf = ts.min(tf);
+                    tf = widen_hi(l, ts.min(tf));
                     m = go_near;
                     if m.count() <= thr {
                         c.handoff(m.count());

@@ -2,6 +2,7 @@
 //! packets switch to when few lanes stay active): near/far order with an explicit stack,
 //! the intersection cache, early exit once the nearest hit is before the next node.
 
+use coherent_accel::aabb::slab1;
 use coherent_accel::triangle::xyzz;
 use coherent_accel::{Hit1, transform_point1, transform_vector1};
 use glam::Vec3;
@@ -39,12 +40,37 @@ impl Ray1x {
         }
     }
 
-    /// The part of the ray in `b`, cut to `[tmin, tmax]`.
+    /// The part of the ray in `b`, cut to `[tmin, tmax]` and widened by [`SLACK`] (before the
+    /// emptiness test: a ray touching the box at a corner is inside).
     #[inline(always)]
     pub fn clip(&self, b: &coherent_accel::Aabb, tmax: f32) -> Option<(f32, f32)> {
-        let v = |a: &[f32; 4]| Vec3::new(a[0], a[1], a[2]);
-        b.clip1(v(&self.o), v(&self.inv), self.tmin, tmax)
+        let (mut t0, mut t1) = (self.tmin, tmax);
+        for k in 0..3 {
+            let (lo, hi) = slab1(self.o[k], self.inv[k], b.min[k], b.max[k]);
+            t0 = max1(lo, t0);
+            t1 = min1(hi, t1);
+        }
+        let (t0, t1) = (widen_lo(t0), widen_hi(t1));
+        (t0 <= t1).then_some((t0, t1))
     }
+}
+
+/// Relative slack added to ray segments where a split or a box cuts them (2^-16): `ts` and
+/// the hit `t` are rounded differently, and a ray through a voxel corner must not skip the
+/// voxel it touches. Without it the equivalence tests found hits exactly at a vertex lying in
+/// two split planes missed; 2^-20 still missed one behind a scaling instance transform.
+pub(crate) const SLACK: f32 = 1.0 / (1 << 16) as f32;
+
+/// `x` moved down by [`SLACK`] relative.
+#[inline(always)]
+pub(crate) fn widen_lo(x: f32) -> f32 {
+    x - x.abs() * SLACK
+}
+
+/// `x` moved up by [`SLACK`] relative.
+#[inline(always)]
+pub(crate) fn widen_hi(x: f32) -> f32 {
+    x + x.abs() * SLACK
 }
 
 /// `max` with the x86 rule: a NaN `a` gives `b`.
@@ -95,9 +121,9 @@ pub(crate) fn walk1<S, C: Counters>(
             } else if ts < tn {
                 node = far;
             } else {
-                stack.push((far as u32, max1(ts, tn), tf));
+                stack.push((far as u32, widen_lo(max1(ts, tn)), tf));
                 node = near;
-                tf = min1(ts, tf);
+                tf = widen_hi(min1(ts, tf));
             }
             continue;
         }

@@ -2,15 +2,13 @@
 //! occlusion, single rays and packets of every lane backend, on random soups, random
 //! instance transforms and random rays, plus the edge cases.
 
-mod common;
-
 use coherent_accel::shapes::{Rng, icosphere, soup};
 use std::sync::OnceLock;
 
+use coherent_accel::testing::*;
 use coherent_accel::{Accel, BruteForce, Mesh, Ray1, Rays, Scene};
 use coherent_bsp::{Bsp, BspParams, SahParams};
 use coherent_simd::{Backend, Kernel, Lanes};
-use common::*;
 use glam::Vec3;
 use proptest::prelude::*;
 
@@ -34,7 +32,7 @@ fn param_sets(lanes: usize) -> Vec<BspParams> {
 pub fn edge_cases<L: Lanes>(l: L) {
     let check = |scene: &Scene, rays: &[Ray1]| {
         for p in param_sets(L::N) {
-            let (bf, bsp) = build_both(scene, &p);
+            let (bf, bsp) = build_both::<Bsp>(scene, &p);
             check_all_queries(l, &bf, &bsp, rays, 1).unwrap();
         }
     };
@@ -47,10 +45,10 @@ pub fn edge_cases<L: Lanes>(l: L) {
         vec![Vec3::ZERO, Vec3::X, 2.0 * Vec3::X],
         vec![[0, 1, 2]],
     );
-    check(&one(flat), &rays);
+    check(&Scene::single(flat), &rays);
 
     // One triangle: axis-parallel rays through its vertices, edges and inside, and along it.
-    let tri = one(Mesh::new(
+    let tri = Scene::single(Mesh::new(
         "one",
         vec![
             Vec3::ZERO,
@@ -90,7 +88,7 @@ pub fn edge_cases<L: Lanes>(l: L) {
         Ray1::infinite(o, Vec3::splat(1e-30)),
     ];
     for p in param_sets(L::N) {
-        let (bf, bsp) = build_both(&scene, &p);
+        let (bf, bsp) = build_both::<Bsp>(&scene, &p);
         for r in &bad {
             assert!(bsp.intersect1(r).is_none() && !bsp.occluded1(r));
             let mut n = 0;
@@ -110,7 +108,7 @@ pub fn edge_cases<L: Lanes>(l: L) {
 
     // Rays lying in split planes of the tree (axis-parallel, origin on the plane), and
     // crossing splits exactly at vertices.
-    let scene = one(soup("grid", 300, 4.0, 1.5, 9));
+    let scene = Scene::single(soup("grid", 300, 4.0, 1.5, 9));
     let bsp = Bsp::build(&scene, &BspParams::default()).unwrap();
     let tree = &bsp.mesh_trees()[0].tree;
     let mut rng = Rng::new(5);
@@ -150,20 +148,39 @@ pub fn edge_cases<L: Lanes>(l: L) {
             ]);
         }
     }
-    let scene = one(Mesh::from_triangles("planes", &tris));
+    let scene = Scene::single(Mesh::from_triangles("planes", &tris));
     let mut rays = random_rays(6, &scene, 200);
     rays.push(Ray1::infinite(Vec3::new(-1.0, 0.0, 0.5), Vec3::X)); // in the plane y = 0
     rays.push(Ray1::infinite(Vec3::new(0.5, 0.5, -1.0), Vec3::Z));
     check(&scene, &rays);
 }
 
+/// Random scenes that once failed (seed, triangles, meshes, instances): a vertex on the mesh
+/// box's corner, a needle triangle, a vertex in two split planes behind a scaling transform.
+const REGRESSIONS: [(u64, usize, usize, usize); 3] = [
+    (11532196785894520903, 4, 2, 1),
+    (5172459823018468742, 54, 2, 5),
+    (667622533911027691, 273, 3, 1),
+];
+
+pub fn regressions<L: Lanes>(l: L) {
+    for (seed, tris, meshes, instances) in REGRESSIONS {
+        let scene = random_scene(seed, tris, meshes, instances);
+        let rays = random_rays(seed, &scene, 96);
+        for p in param_sets(L::N) {
+            let (bf, bsp) = build_both::<Bsp>(&scene, &p);
+            check_all_queries(l, &bf, &bsp, &rays, seed).unwrap();
+        }
+    }
+}
+
 /// 10^5 triangles: built once, 64 rays against brute force per backend.
 pub fn large_scene<L: Lanes>(l: L) {
     static LARGE: OnceLock<(BruteForce, Bsp, Vec<Ray1>)> = OnceLock::new();
     let (bf, bsp, rays) = LARGE.get_or_init(|| {
-        let scene = one(soup("big", 100_000, 20.0, 0.8, 11));
+        let scene = Scene::single(soup("big", 100_000, 20.0, 0.8, 11));
         let rays = random_rays(12, &scene, 64);
-        let (bf, bsp) = build_both(&scene, &BspParams::default());
+        let (bf, bsp) = build_both::<Bsp>(&scene, &BspParams::default());
         (bf, bsp, rays)
     });
     assert_eq!(bsp.stats().triangles, 100_000);
@@ -195,7 +212,7 @@ pub fn moving_instances<L: Lanes>(l: L, seed: u64) {
             assert_eq!(a.lane(i), b.lane(i));
         }
     }
-    let (bf, _) = build_both(&moved, &p);
+    let (bf, _) = build_both::<Bsp>(&moved, &p);
     check_all_queries(l, &bf, &bsp, &rays, seed).unwrap();
     // A bad instance list is refused and names the instance.
     let mut bad = moved.instances.clone();
@@ -210,6 +227,15 @@ impl Kernel for EdgeCases {
     #[inline(always)]
     fn run<L: Lanes>(self, l: L) {
         edge_cases(l)
+    }
+}
+
+struct Regressions;
+impl Kernel for Regressions {
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) {
+        regressions(l)
     }
 }
 
@@ -248,9 +274,17 @@ impl Kernel for RandomScene {
         let scene = random_scene(self.seed, self.tris, self.meshes, self.instances);
         let rays = random_rays(self.seed, &scene, 96);
         let p = param_sets(L::N).swap_remove(self.preset);
-        let (bf, bsp) = build_both(&scene, &p);
+        let (bf, bsp) = build_both::<Bsp>(&scene, &p);
         check_all_queries(l, &bf, &bsp, &rays, self.seed)
     }
+}
+
+/// Random scenes per backend: 24, or `PROPTEST_CASES` when set (for longer hunts).
+fn cases() -> u32 {
+    std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(24)
 }
 
 /// Runs `k` on backend `b`, or says why it is skipped (`None`).
@@ -282,12 +316,17 @@ macro_rules! bsp_tests {
             }
 
             #[test]
+            fn regressions() {
+                on(B, Regressions);
+            }
+
+            #[test]
             fn moving_instances() {
                 on(B, MovingInstances);
             }
 
             proptest! {
-                #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+                #![proptest_config(ProptestConfig { cases: cases(), ..ProptestConfig::default() })]
 
                 #[test]
                 fn random_scenes_match_brute_force(
@@ -317,7 +356,7 @@ bsp_tests!(pulp16, Backend::Pulp16);
 
 #[test]
 fn object_presets_differ() {
-    let s = one(icosphere("ico", Vec3::ZERO, 1.0, 4));
+    let s = Scene::single(icosphere("ico", Vec3::ZERO, 1.0, 4));
     let fast = Bsp::build(
         &s,
         &BspParams {

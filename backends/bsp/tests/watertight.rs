@@ -9,9 +9,17 @@
 //! `ci_no_leaks` runs a modest number of rays on every backend; `million_rays` (ignored, run
 //! with `cargo test --release -p coherent-bsp --test watertight -- --ignored --nocapture`)
 //! counts leaks over 10^6 rays per configuration and prints them.
+//!
+//! Last measured: 1 leak in 7 * 10^6 rays per backend (scalar, sse, pulp16; the same ray, a
+//! grazing one in the torus), single-ray and packet alike, with `EDGE_EPS = 2^-13`; without
+//! the tolerance 557,830. The BSP adds no leaks of its own: brute force leaks on exactly the
+//! same rays. The remaining leaks come from the projection test itself: for a ray meeting a
+//! triangle's plane at a grazing angle, the rounding of the hit distance moves the projected
+//! point by more than the tolerance. A watertight test (shared edge functions, Woop et al.
+//! 2013) would remove them at about twice the arithmetic per test; the paper's test is kept.
 
 use coherent_accel::shapes::{Rng, cuboid, icosphere, torus, uv_sphere};
-use coherent_accel::{Accel, Instance, Mesh, Ray1, Rays, Scene};
+use coherent_accel::{Accel, BruteForce, Instance, Mesh, Ray1, Rays, Scene};
 use coherent_bsp::{Bsp, BspParams};
 use coherent_simd::{Backend, Kernel, Lanes};
 use glam::{Affine3A, Quat, Vec3};
@@ -110,7 +118,8 @@ struct CountLeaks {
 }
 
 impl Kernel for CountLeaks {
-    type Output = Vec<(&'static str, usize, usize, usize)>;
+    /// Per case: name, rays, single-ray leaks, packet leaks, leaks brute force does not have.
+    type Output = Vec<(&'static str, usize, usize, usize, usize)>;
     #[inline(always)]
     fn run<L: Lanes>(self, l: L) -> Self::Output {
         let all = l.splat_mask(true);
@@ -118,15 +127,18 @@ impl Kernel for CountLeaks {
             .iter()
             .map(|case| {
                 let bsp = Bsp::build(&case.scene, &BspParams::default()).unwrap();
+                let bf = BruteForce::build(&case.scene, &()).unwrap();
                 let rays = aimed_rays(case, self.n, 42);
-                let single = rays.iter().filter(|r| leaked(bsp.intersect1(r))).count();
+                let leaks: Vec<&Ray1> = rays.iter().filter(|r| leaked(bsp.intersect1(r))).collect();
+                let single = leaks.len();
+                let own = leaks.iter().filter(|r| !leaked(bf.intersect1(r))).count();
                 let mut packet = 0;
                 for c in rays.chunks(L::N) {
                     let p = Rays::from_fn(l, |i| c[i % c.len()]);
                     let hits = bsp.intersect(l, &p, all);
                     packet += (0..c.len()).filter(|&i| leaked(hits.lane(i))).count();
                 }
-                (case.name, rays.len(), single, packet)
+                (case.name, rays.len(), single, packet, own)
             })
             .collect()
     }
@@ -136,7 +148,7 @@ impl Kernel for CountLeaks {
 fn ci_no_leaks() {
     for b in Backend::available() {
         let n = if b == Backend::Scalar { 20_000 } else { 4_000 };
-        for (name, rays, single, packet) in b.run(CountLeaks { n }).unwrap() {
+        for (name, rays, single, packet, _) in b.run(CountLeaks { n }).unwrap() {
             assert_eq!(
                 (single, packet),
                 (0, 0),
@@ -155,9 +167,10 @@ fn million_rays() {
         if !b.is_available() {
             continue;
         }
-        for (name, rays, single, packet) in b.run(CountLeaks { n: 1_000_000 }).unwrap() {
+        for (name, rays, single, packet, own) in b.run(CountLeaks { n: 1_000_000 }).unwrap() {
             println!(
-                "{:>7} {name:>22}: {rays} rays, leaks single {single}, packet {packet}",
+                "{:>7} {name:>22}: {rays} rays, leaks single {single}, packet {packet} \
+                 (brute force hits {own} of them)",
                 b.name()
             );
             total += single + packet;
