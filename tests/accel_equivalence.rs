@@ -4,8 +4,10 @@
 //! random instance transforms) and on the real meshes `scripts/native.py` fetches.
 //!
 //! The BSP uses the same triangle records as `BruteForce` (`TriAccel`, whose barycentric test
-//! accepts points up to `EDGE_EPS` outside an edge), so it must agree exactly (ties aside).
-//! Embree and obvhs use their own exact edge tests (Embree searches `(tnear, tfar]` where
+//! accepts points up to `EDGE_EPS` outside an edge) and is held to the `Accel` contract's rule
+//! (`coherent_accel::testing::check_all_queries`: the same answers, ties aside, except that
+//! hits within `EDGE_EPS` of an edge may be missed). Embree and obvhs use their own exact edge
+//! tests (Embree searches `(tnear, tfar]` where
 //! the interface asks for `[tmin, tmax)`), so for them a hit may be present on one side only
 //! when it lies near its triangle's border (within `4 * EDGE_EPS` in barycentrics, or within
 //! the tests' precision below), at a segment bound, at a glancing angle (cosine under 1e-3),
@@ -16,33 +18,26 @@
 //! the cosine of incidence: two single-precision tests know a hit no better. That is the
 //! whole tolerance; anything else is a failure.
 
-#[path = "../backends/bsp/tests/common/mod.rs"]
-mod common;
+// Without Embree and obvhs only the BSP is checked, with the shared checks of `testing`.
+#![cfg_attr(
+    not(any(feature = "embree", feature = "obvhs")),
+    allow(dead_code, unused_imports)
+)]
 
 use std::sync::OnceLock;
 
 use coherent_accel::shapes::Rng;
+use coherent_accel::testing::{random_rays, random_scene, same_t};
 use coherent_accel::{Accel, BruteForce, EDGE_EPS, Hit1, Mesh, Ray1, Rays, Scene};
 use coherent_bsp::{Bsp, BspParams};
 use coherent_simd::{Backend, Kernel, Lanes, SimdMask};
-use common::{random_rays, random_scene, same_t};
 use glam::Vec3;
 use proptest::prelude::*;
 
-/// How an accelerator's triangle test relates to the reference's.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Edges {
-    /// The reference's own test (`TriAccel`): answers agree exactly.
-    Shared,
-    /// An exact test of its own: border hits may differ (see the module documentation).
-    #[cfg_attr(not(any(feature = "embree", feature = "obvhs")), allow(dead_code))]
-    Exact,
-}
-
-/// What hits are compared against: the scene and the kind of triangle test.
+/// What the hits of an accelerator with its own exact triangle test are compared against:
+/// the scene (for the triangles' geometry).
 #[derive(Clone, Copy)]
 struct Ref<'a> {
-    edges: Edges,
     scene: &'a Scene,
 }
 
@@ -81,9 +76,6 @@ impl Ref<'_> {
 
     /// A hit the two kinds of test may disagree on (see the module documentation).
     fn fuzzy(&self, h: &Hit1, r: &Ray1) -> bool {
-        if self.edges == Edges::Shared {
-            return false;
-        }
         let [a, b, c] = self.triangle(h);
         let area2 = (b - a).cross(c - a).length();
         let longest = (b - a).length().max((c - b).length()).max((a - c).length());
@@ -105,16 +97,12 @@ impl Ref<'_> {
         border || bound || sliver || grazing
     }
 
-    /// `a` and `b` are the same hit of `r`: the same triangle, and (shared test) `t` within
-    /// 1e-5 relative and barycentrics within 1e-4, or (exact tests) the points at `t` and at
+    /// `a` and `b` are the same hit of `r`: the same triangle, and the points at `t` and at
     /// the barycentrics within 1e-5 of the distances involved, divided by the cosine of the
     /// incidence (`t` of a glancing hit is known to no better).
     fn same(&self, a: &Hit1, b: &Hit1, r: &Ray1) -> bool {
         if (a.inst, a.prim) != (b.inst, b.prim) {
             return false;
-        }
-        if self.edges == Edges::Shared {
-            return same_t(a.t, b.t) && (a.u - b.u).abs() < 1e-4 && (a.v - b.v).abs() < 1e-4;
         }
         let tol = self.tolerance(a, r);
         (r.dir * (a.t - b.t)).length() <= tol && (self.point(a) - self.point(b)).length() <= tol
@@ -265,33 +253,13 @@ fn check_which<L: Lanes>(
     match which {
         Which::Bsp => {
             let a = Bsp::build(scene, &BspParams::default()).map_err(fail)?;
-            check_queries(
-                l,
-                Ref {
-                    edges: Edges::Shared,
-                    scene,
-                },
-                bf,
-                &a,
-                rays,
-                seed,
-            )
+            coherent_accel::testing::check_all_queries(l, bf, &a, rays, seed)
         }
         #[cfg(feature = "embree")]
         Which::Embree => {
             use coherent::embree::{Embree, EmbreeParams};
             let a = Embree::build(scene, &EmbreeParams::default()).map_err(fail)?;
-            check_queries(
-                l,
-                Ref {
-                    edges: Edges::Exact,
-                    scene,
-                },
-                bf,
-                &a,
-                rays,
-                seed,
-            )
+            check_queries(l, Ref { scene }, bf, &a, rays, seed)
         }
         #[cfg(feature = "obvhs")]
         Which::Obvhs(kind) => {
@@ -304,17 +272,7 @@ fn check_which<L: Lanes>(
                 },
             )
             .map_err(fail)?;
-            check_queries(
-                l,
-                Ref {
-                    edges: Edges::Exact,
-                    scene,
-                },
-                bf,
-                &a,
-                rays,
-                seed,
-            )
+            check_queries(l, Ref { scene }, bf, &a, rays, seed)
         }
     }
 }
