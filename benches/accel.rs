@@ -1,6 +1,8 @@
 //! Criterion benches of the two-level BSP (paper section 3): object-tree build (100k
 //! triangles, each preset), top-level rebuild over 1,024 moving instances, and traversal of
-//! primary, shadow and diffuse rays one at a time and in packets of every available backend.
+//! primary, shadow and diffuse rays one at a time and in packets of every available backend;
+//! the same builds and traversals for Embree and obvhs (BVH2, CWBVH; single rays only) where
+//! compiled in.
 //!
 //! `cargo bench --bench accel` (add `-- build` or `-- trace` to pick a group).
 
@@ -10,9 +12,12 @@ use coherent::simd::Backend;
 use coherent_accel::scenes::{self, SceneSize};
 use coherent_accel::shapes::terrain;
 use coherent_accel::workload::{self, Clock, RayKind, TimePackets};
-use coherent_accel::{Accel, Scene};
+use coherent_accel::{Accel, Mesh, Scene};
 use coherent_bsp::{Bsp, BspParams, MeshTree, SahParams};
-use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use criterion::measurement::WallTime;
+use criterion::{
+    BenchmarkGroup, BenchmarkId, Criterion, Throughput, criterion_group, criterion_main,
+};
 use glam::{Affine3A, Vec3};
 
 fn build(c: &mut Criterion) {
@@ -45,7 +50,73 @@ fn build(c: &mut Criterion) {
     g.bench_function("top_1025_instances", |b| {
         b.iter(|| bsp.set_instances(black_box(&moved)).unwrap())
     });
+    build_others(&mut g, &mesh, &s.scene, &moved);
     g.finish();
+}
+
+/// Embree and obvhs: the 100k-triangle mesh, and the top level after the instances moved.
+fn build_others(
+    g: &mut BenchmarkGroup<'_, WallTime>,
+    mesh: &Mesh,
+    field: &Scene,
+    moved: &[coherent_accel::Instance],
+) {
+    let single = Scene::single(mesh.clone());
+    #[cfg(feature = "embree")]
+    {
+        use coherent::embree::{BuildQuality, Embree, EmbreeParams};
+        match Embree::build(field, &EmbreeParams::default()) {
+            Err(e) => eprintln!("skipping the Embree benches: {e}"),
+            Ok(mut embree) => {
+                g.throughput(Throughput::Elements(mesh.indices.len() as u64));
+                for q in BuildQuality::ALL {
+                    let p = EmbreeParams {
+                        mesh_quality: q,
+                        ..EmbreeParams::default()
+                    };
+                    g.bench_function(BenchmarkId::new("embree_100k_tris", q.name()), |b| {
+                        b.iter(|| Embree::build(black_box(&single), &p).unwrap())
+                    });
+                }
+                g.throughput(Throughput::Elements(moved.len() as u64));
+                g.bench_function("embree_top_1025_instances", |b| {
+                    b.iter(|| embree.set_instances(black_box(moved)).unwrap())
+                });
+            }
+        }
+    }
+    #[cfg(feature = "obvhs")]
+    {
+        use coherent::obvhs::{Kind, Obvhs, ObvhsParams, Preset};
+        for kind in Kind::ALL {
+            g.throughput(Throughput::Elements(mesh.indices.len() as u64));
+            for preset in [Preset::FastBuild, Preset::MediumBuild, Preset::SlowBuild] {
+                let p = ObvhsParams {
+                    kind,
+                    mesh_preset: preset,
+                    ..ObvhsParams::default()
+                };
+                let id =
+                    BenchmarkId::new(format!("obvhs_{}_100k_tris", kind.name()), preset.name());
+                g.bench_function(id, |b| {
+                    b.iter(|| Obvhs::build(black_box(&single), &p).unwrap())
+                });
+            }
+            let mut o = Obvhs::build(
+                field,
+                &ObvhsParams {
+                    kind,
+                    ..ObvhsParams::default()
+                },
+            )
+            .unwrap();
+            g.throughput(Throughput::Elements(moved.len() as u64));
+            g.bench_function(format!("obvhs_{}_top_1025_instances", kind.name()), |b| {
+                b.iter(|| o.set_instances(black_box(moved)).unwrap())
+            });
+        }
+    }
+    let _ = (g, single, field, moved);
 }
 
 fn trace(c: &mut Criterion) {
@@ -57,47 +128,79 @@ fn trace(c: &mut Criterion) {
         scenes::room(SceneSize::Quick),
     ] {
         let bsp = Bsp::build(&s.scene, &BspParams::default()).unwrap();
-        for kind in RayKind::ALL {
-            let rays_for = |lanes: usize| {
-                let primary = workload::primary_rays(&s.view, w, h, workload::tile_shape(lanes));
-                match kind {
-                    RayKind::Primary => primary,
-                    RayKind::Shadow => workload::shadow_rays(&bsp, &s.scene, &primary, s.light),
-                    RayKind::Diffuse => workload::diffuse_rays(&bsp, &s.scene, &primary, 1),
-                }
+        trace_accel(&mut g, &bsp, &s, &bsp, (w, h), true);
+        #[cfg(feature = "embree")]
+        match coherent::embree::Embree::build(&s.scene, &Default::default()) {
+            Ok(embree) => trace_accel(&mut g, &embree, &s, &bsp, (w, h), true),
+            Err(e) => eprintln!("skipping the Embree benches: {e}"),
+        }
+        #[cfg(feature = "obvhs")]
+        for kind in coherent::obvhs::Kind::ALL {
+            use coherent::obvhs::{Obvhs, ObvhsParams};
+            let p = ObvhsParams {
+                kind,
+                ..ObvhsParams::default()
             };
-            let rays = rays_for(1);
-            let name = format!("{}/{}", s.name, kind.name());
-            g.throughput(Throughput::Elements(rays.len() as u64));
-            g.bench_function(BenchmarkId::new(name.clone(), "single"), |b| {
-                b.iter(|| {
-                    workload::time_single(&bsp, black_box(&rays), kind.occlusion(), 1, Clock::Wall)
-                })
-            });
-            for backend in Backend::available()
-                .into_iter()
-                .filter(|b| *b != Backend::Scalar)
-            {
-                let rays = rays_for(backend.lanes());
-                g.throughput(Throughput::Elements(rays.len() as u64));
-                g.bench_function(BenchmarkId::new(name.clone(), backend.name()), |b| {
-                    b.iter(|| {
-                        backend
-                            .run(TimePackets {
-                                accel: &bsp,
-                                rays: black_box(&rays),
-                                occlusion: kind.occlusion(),
-                                repeats: 1,
-                                clock: Clock::Wall,
-                            })
-                            .unwrap()
-                    })
-                });
-            }
+            let o = Obvhs::build(&s.scene, &p).unwrap();
+            // obvhs traverses single rays only: no packet benches.
+            trace_accel(&mut g, &o, &s, &bsp, (w, h), false);
         }
     }
     g.finish();
-    let _ = Scene::default();
+}
+
+/// Primary, shadow and diffuse rays through `accel`, one at a time and (with `packets`) in
+/// packets of every available backend; the secondary rays come from the BSP's hits, so every
+/// accelerator traces the same rays.
+fn trace_accel<A: Accel>(
+    g: &mut BenchmarkGroup<'_, WallTime>,
+    accel: &A,
+    s: &scenes::BuiltinScene,
+    bsp: &Bsp,
+    (w, h): (u32, u32),
+    packets: bool,
+) {
+    for kind in RayKind::ALL {
+        let rays_for = |lanes: usize| {
+            let primary = workload::primary_rays(&s.view, w, h, workload::tile_shape(lanes));
+            match kind {
+                RayKind::Primary => primary,
+                RayKind::Shadow => workload::shadow_rays(bsp, &s.scene, &primary, s.light),
+                RayKind::Diffuse => workload::diffuse_rays(bsp, &s.scene, &primary, 1),
+            }
+        };
+        let rays = rays_for(1);
+        let name = format!("{}/{}/{}", accel.name(), s.name, kind.name());
+        g.throughput(Throughput::Elements(rays.len() as u64));
+        g.bench_function(BenchmarkId::new(name.clone(), "single"), |b| {
+            b.iter(|| {
+                workload::time_single(accel, black_box(&rays), kind.occlusion(), 1, Clock::Wall)
+            })
+        });
+        if !packets {
+            continue;
+        }
+        for backend in Backend::available()
+            .into_iter()
+            .filter(|b| *b != Backend::Scalar)
+        {
+            let rays = rays_for(backend.lanes());
+            g.throughput(Throughput::Elements(rays.len() as u64));
+            g.bench_function(BenchmarkId::new(name.clone(), backend.name()), |b| {
+                b.iter(|| {
+                    backend
+                        .run(TimePackets {
+                            accel,
+                            rays: black_box(&rays),
+                            occlusion: kind.occlusion(),
+                            repeats: 1,
+                            clock: Clock::Wall,
+                        })
+                        .unwrap()
+                })
+            });
+        }
+    }
 }
 
 criterion_group!(benches, build, trace);

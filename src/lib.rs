@@ -5,10 +5,16 @@ pub use coherent_accel as accel;
 pub use coherent_bsp as bsp;
 pub use coherent_simd as simd;
 
+#[cfg(feature = "embree")]
+pub use coherent_embree as embree;
+#[cfg(feature = "obvhs")]
+pub use coherent_obvhs as obvhs;
+
 pub mod approx;
 pub mod bdf;
 pub mod kernels;
 pub mod machine;
 pub mod material;
+pub mod mesh_file;
 pub mod tabulated;
 pub mod texture;

@@ -80,8 +80,9 @@ pub struct PlotFiles {
     pub svg: PathBuf,
 }
 
-/// Series colours: distinct on white and for common colour blindness (Okabe-Ito).
-const COLOURS: [RGBColor; 8] = [
+/// Series colours: distinct on white and for common colour blindness (Okabe-Ito), then two
+/// greys for charts with more series (the accel comparison has nine).
+const COLOURS: [RGBColor; 10] = [
     RGBColor(0, 114, 178),
     RGBColor(230, 159, 0),
     RGBColor(0, 158, 115),
@@ -90,6 +91,8 @@ const COLOURS: [RGBColor; 8] = [
     RGBColor(213, 94, 0),
     RGBColor(240, 228, 66),
     RGBColor(0, 0, 0),
+    RGBColor(150, 150, 150),
+    RGBColor(90, 90, 90),
 ];
 
 fn colour(i: usize) -> RGBColor {

@@ -58,4 +58,8 @@ pub enum AccelError {
     /// More instances than 32-bit indices can address.
     #[error("too many instances: {count}")]
     TooManyInstances { count: usize },
+    /// The accelerator cannot run here (a native library missing, an unsupported CPU); the
+    /// reason names the cause and the fix. The other accelerators are unaffected.
+    #[error("accelerator {accel} is unavailable: {reason}")]
+    Unavailable { accel: &'static str, reason: String },
 }

@@ -91,3 +91,22 @@ pub struct Hit1 {
     pub prim: u32,
     pub inst: u32,
 }
+
+impl Ray1 {
+    /// For structures that search `t >= 0` only (Embree, obvhs): the same ray with `tmin >= 0`
+    /// and the shift `s` to add to its hits' `t`. A ray with `tmin < 0` is clipped to
+    /// `bounds` (which must hold everything it can hit) and its origin moved to the clipped
+    /// start when that lies behind it. `None` when such a ray misses `bounds`.
+    #[inline]
+    pub fn forward(&self, bounds: &crate::Aabb) -> Option<(Ray1, f32)> {
+        if self.tmin >= 0.0 {
+            return Some((*self, 0.0));
+        }
+        let (t0, _) = bounds.clip1(self.origin, self.dir.recip(), self.tmin, self.tmax)?;
+        if t0 >= 0.0 {
+            return Some((Ray1 { tmin: 0.0, ..*self }, 0.0));
+        }
+        let moved = Ray1::new(self.at(t0), self.dir, 0.0, self.tmax - t0);
+        Some((moved, t0))
+    }
+}

@@ -1,0 +1,266 @@
+#!/usr/bin/env python3
+"""Fetches the project's native pieces from the package registries, pinned and checksummed.
+
+  embree  Embree 4.4 (libembree4 + its libtbb) out of the PyPI wheel embreex==4.4.0.post1,
+          into .native/embree/lib/ (the Embree backend loads it at run time).
+  meshes  Real test meshes out of Debian packages (the Stanford bunny from glmark2-data,
+          OFF meshes from libcgal-demo), into .cache/meshes/.
+
+Idempotent and quiet when everything is in place: files already there are checked against
+their recorded sha256 and only fetched again when missing or changed. Exit status: 0 when
+Embree is usable (a mesh that cannot be fetched is a warning: the experiments say so and go
+on without it), 1 when Embree could not be set up (the message names the cause and the fix).
+
+Usage: python3 scripts/native.py [embree] [meshes]      (no argument: both)
+Environment: EMBREE_DIR=<an Embree 4 install> skips the wheel (the backend loads from there).
+"""
+
+import hashlib
+import json
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import tarfile
+import tempfile
+import zipfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+NATIVE = ROOT / ".native"
+MESHES = ROOT / ".cache" / "meshes"
+
+# The Embree 4.4 library as built by the embreex project (manylinux, x86-64). The wheel is
+# tagged per CPython version; the library inside is the same, so one exact file is pinned
+# and asked for whatever python runs pip.
+EMBREE_WHEEL = {
+    "requirement": "embreex==4.4.0.post1",
+    "file": "embreex-4.4.0.post1-cp311-cp311-manylinux_2_27_x86_64.manylinux_2_28_x86_64.whl",
+    "sha256": "2cd0f7d5c6342e6247e31f700761689cae7829454d8c6de0c41e62124a023e1f",
+    "pip_args": ["--python-version", "3.11", "--implementation", "cp",
+                 "--platform", "manylinux_2_28_x86_64"],
+    "library": "libembree4-4aef3270.so.4",
+}
+
+# Debian bookworm packages holding real meshes: (package, version, .deb sha256, members).
+# Each member: (path inside the package, name in .cache/meshes/).
+MESH_DEBS = [
+    {
+        "package": "glmark2-data",
+        "version": "2023.01+dfsg-1",
+        "sha256": "14a62322c6131ac9d846f428f06056a1de85caded38c77cb497b73e9ec316bd9",
+        "members": [("usr/share/glmark2/models/bunny.obj", "bunny.obj")],
+    },
+    {
+        "package": "libcgal-demo",
+        "version": "5.5.1-2",
+        "sha256": "78b09b23d4d6d1bf15552a1060b419ab3fc09918486462faed197e5fc6ac3735",
+        "members": [],  # filled in below: OFF files from the demo data archive
+    },
+]
+
+
+class SetupError(Exception):
+    """A set-up step failed; the message names the cause and the fix."""
+
+
+def say(msg):
+    print(f"native.py: {msg}", file=sys.stderr)
+
+
+def sha256_of(path):
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def marker_ok(folder):
+    """True when folder/READY.json lists files that are all present with their sha256."""
+    marker = folder / "READY.json"
+    try:
+        recorded = json.loads(marker.read_text())
+        return all(sha256_of(folder / name) == digest for name, digest in recorded.items())
+    except (OSError, ValueError, AttributeError):
+        return False
+
+
+def write_marker(folder, names):
+    recorded = {name: sha256_of(folder / name) for name in names}
+    (folder / "READY.json").write_text(json.dumps(recorded, indent=1, sort_keys=True) + "\n")
+
+
+def pip_download(requirement, extra_args, dest):
+    cmd = [sys.executable, "-m", "pip", "download", "--quiet", "--no-deps",
+           "--only-binary=:all:", "--disable-pip-version-check", "--dest", str(dest),
+           *extra_args, requirement]
+    try:
+        run = subprocess.run(cmd, capture_output=True, text=True)
+    except OSError as e:
+        raise SetupError(f"cannot run pip ({e}); install pip for {sys.executable}") from e
+    if run.returncode != 0:
+        tail = (run.stderr or run.stdout).strip().splitlines()[-3:]
+        raise SetupError(f"`pip download {requirement}` failed: {' / '.join(tail)}; "
+                         "check that PyPI is reachable, or set EMBREE_DIR to an Embree 4 install")
+
+
+def verify(path, expected, what):
+    got = sha256_of(path)
+    if got != expected:
+        raise SetupError(f"checksum mismatch for {what} ({path.name}): expected sha256 "
+                         f"{expected}, got {got}; the registry served a file that is not the "
+                         "pinned one, or it was corrupted on the way: run "
+                         "`python3 scripts/native.py` again, and if it persists review the "
+                         "pin in scripts/native.py (never just replace the checksum)")
+
+
+def setup_embree():
+    """Makes .native/embree/lib/libembree4.so.4 (and its libtbb) from the pinned wheel."""
+    if os.environ.get("EMBREE_DIR"):
+        return  # the user's own Embree install; the backend loads from there
+    if sys.platform != "linux" or platform.machine() not in ("x86_64", "AMD64"):
+        say(f"no pinned Embree build for {sys.platform}/{platform.machine()}: the embree "
+            "backend will report itself unavailable (set EMBREE_DIR to an Embree 4 install)")
+        return
+    folder = NATIVE / "embree" / "lib"
+    if marker_ok(folder):
+        return
+    say("fetching Embree 4.4 (PyPI embreex==4.4.0.post1, pinned by sha256) into .native/embree")
+    downloads = NATIVE / "downloads"
+    downloads.mkdir(parents=True, exist_ok=True)
+    wheel = downloads / EMBREE_WHEEL["file"]
+    if not wheel.exists() or sha256_of(wheel) != EMBREE_WHEEL["sha256"]:
+        with tempfile.TemporaryDirectory(dir=downloads) as tmp:
+            pip_download(EMBREE_WHEEL["requirement"], EMBREE_WHEEL["pip_args"], tmp)
+            got = list(Path(tmp).iterdir())
+            names = [p.name for p in got]
+            if names != [EMBREE_WHEEL["file"]]:
+                raise SetupError(f"pip served {names}, not the pinned {EMBREE_WHEEL['file']}; "
+                                 "update EMBREE_WHEEL in scripts/native.py deliberately")
+            verify(got[0], EMBREE_WHEEL["sha256"], EMBREE_WHEEL["requirement"])
+            os.replace(got[0], wheel)
+    verify(wheel, EMBREE_WHEEL["sha256"], EMBREE_WHEEL["requirement"])
+    # Unpack the libraries only (the wheel's Python module is not used).
+    if folder.exists():
+        shutil.rmtree(folder)
+    folder.mkdir(parents=True)
+    libs = []
+    with zipfile.ZipFile(wheel) as zf:
+        for info in zf.infolist():
+            if info.filename.startswith("embreex.libs/") and not info.is_dir():
+                name = Path(info.filename).name
+                with zf.open(info) as src, open(folder / name, "wb") as dst:
+                    shutil.copyfileobj(src, dst)
+                libs.append(name)
+    if EMBREE_WHEEL["library"] not in libs:
+        raise SetupError(f"{wheel.name} holds no {EMBREE_WHEEL['library']} (found {libs})")
+    # The SONAME is libembree4-4aef3270.so.4 and its RPATH is $ORIGIN, so libtbb is found
+    # beside it. The usual names point at it so that a linker or loader can use either.
+    for alias in ("libembree4.so.4", "libembree4.so"):
+        (folder / alias).symlink_to(EMBREE_WHEEL["library"])
+    write_marker(folder, sorted(libs))
+
+
+def apt_download(package, version, dest):
+    """Fetches one .deb by name and version with apt-get (Debian's own client)."""
+    spec = f"{package}={version}"
+    cmd = ["apt-get", "download", "-q", spec]
+    try:
+        run = subprocess.run(cmd, cwd=dest, capture_output=True, text=True)
+    except OSError as e:
+        raise SetupError(f"cannot run apt-get ({e}): no Debian package client") from e
+    if run.returncode != 0 and "Unable to locate" in run.stderr and os.geteuid() == 0:
+        # A fresh machine may have no package lists yet: fetch them once and try again.
+        subprocess.run(["apt-get", "update", "-q"], capture_output=True)
+        run = subprocess.run(cmd, cwd=dest, capture_output=True, text=True)
+    if run.returncode != 0:
+        tail = (run.stderr or run.stdout).strip().splitlines()[-2:]
+        hint = "run `apt-get update` first" if "Unable to locate" in run.stderr or \
+            "Can't find a source" in run.stderr else "check that Debian's mirror is reachable"
+        raise SetupError(f"`apt-get download {spec}` failed: {' / '.join(tail)}; {hint}")
+    debs = list(Path(dest).glob(f"{package}_*.deb"))
+    if len(debs) != 1:
+        raise SetupError(f"`apt-get download {spec}` left {debs}, expected one .deb")
+    return debs[0]
+
+
+def deb_members(deb, wanted, out):
+    """Extracts the wanted paths from a .deb's data archive into `out` (dpkg-deb -x)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        run = subprocess.run(["dpkg-deb", "-x", str(deb), tmp], capture_output=True, text=True)
+        if run.returncode != 0:
+            raise SetupError(f"dpkg-deb -x {deb.name} failed: {run.stderr.strip()}")
+        got = []
+        for inner, name in wanted(Path(tmp)):
+            shutil.copyfile(Path(tmp) / inner, out / name)
+            got.append(name)
+        return got
+
+
+# libcgal-demo ships its demo data as a tarball; these OFF meshes are taken from it.
+CGAL_DATA = "usr/share/doc/libcgal-dev/data.tar.gz"
+CGAL_OFF = ["armadillo.off", "ChineseDragon-10kv.off", "refined_elephant.off"]
+
+
+def cgal_members(root):
+    """The OFF meshes named in CGAL_OFF, out of libcgal-demo's data archive."""
+    found = []
+    with tarfile.open(root / CGAL_DATA) as tf:
+        for name in CGAL_OFF:
+            try:
+                member = tf.getmember(f"data/meshes/{name}")
+            except KeyError:
+                continue
+            (root / name).write_bytes(tf.extractfile(member).read())
+            found.append((name, name))
+    return found
+
+
+def setup_meshes():
+    """Fetches the mesh packages; a failure is reported and the rest goes on."""
+    MESHES.mkdir(parents=True, exist_ok=True)
+    for spec in MESH_DEBS:
+        folder = MESHES / spec["package"]
+        if marker_ok(folder):
+            continue
+        try:
+            say(f"fetching meshes from Debian package {spec['package']}={spec['version']}")
+            folder.mkdir(parents=True, exist_ok=True)
+            with tempfile.TemporaryDirectory(dir=MESHES) as tmp:
+                deb = apt_download(spec["package"], spec["version"], tmp)
+                verify(deb, spec["sha256"], f"{spec['package']}={spec['version']}")
+                if spec["package"] == "libcgal-demo":
+                    wanted = cgal_members
+                else:
+                    wanted = lambda _root, m=spec["members"]: m  # noqa: E731
+                names = deb_members(deb, wanted, folder)
+            if not names:
+                raise SetupError(f"{spec['package']} held none of the expected meshes")
+            write_marker(folder, names)
+        except (SetupError, OSError) as e:
+            say(f"warning: meshes from {spec['package']} unavailable: {e}")
+
+
+def main(argv):
+    what = set(argv) or {"embree", "meshes"}
+    unknown = what - {"embree", "meshes"}
+    if unknown:
+        say(f"unknown step(s) {sorted(unknown)}; steps are: embree meshes")
+        return 2
+    status = 0
+    if "embree" in what:
+        try:
+            setup_embree()
+        except (SetupError, OSError) as e:
+            say(f"error: Embree set-up failed: {e}")
+            say("the embree backend stays unavailable; everything else still builds and runs")
+            status = 1
+    if "meshes" in what:
+        setup_meshes()
+    return status
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

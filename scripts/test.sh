@@ -1,0 +1,11 @@
+#!/usr/bin/env bash
+# The project's tests, set-up included: fetches the pinned native pieces (Embree, meshes),
+# then runs the whole workspace's tests with the default features and with none.
+# Usage: scripts/test.sh [extra cargo test arguments]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+python3 scripts/native.py
+# The real-mesh tests fail, rather than skip, when the meshes could not be fetched.
+export COHERENT_REQUIRE_MESHES=1
+cargo test --workspace "$@"
+cargo test --workspace --no-default-features "$@"

@@ -1,0 +1,473 @@
+//! Every accelerator (the paper's BSP of section 3, Embree, obvhs BVH2 and CWBVH) against
+//! `BruteForce`, for every lane backend: first hit, all hits and occlusion, single rays and
+//! packets, on random scenes (soups with planar, shared-edge and degenerate triangles under
+//! random instance transforms) and on the real meshes `scripts/native.py` fetches.
+//!
+//! The BSP uses the same triangle records as `BruteForce` (`TriAccel`, whose barycentric test
+//! accepts points up to `EDGE_EPS` outside an edge) and is held to the `Accel` contract's rule
+//! (`coherent_accel::testing::check_all_queries`: the same answers, ties aside, except that
+//! hits within `EDGE_EPS` of an edge may be missed). Embree and obvhs use their own exact edge
+//! tests (Embree searches `(tnear, tfar]` where
+//! the interface asks for `[tmin, tmax)`), so for them a hit may be present on one side only
+//! when it lies near its triangle's border (within `4 * EDGE_EPS` in barycentrics, or within
+//! the tests' precision below), at a segment bound, at a glancing angle (cosine under 1e-3),
+//! or on a sliver (height under 1e-3 of its longest edge: the random soups collapse some
+//! triangles onto a line, and rounding decides whether a ray along one meets it). Hits both
+//! report must agree, in world units, in the point at `t` and the point their barycentrics
+//! give, within 1e-5 of the distances involved (origin, travel, triangle size) divided by
+//! the cosine of incidence: two single-precision tests know a hit no better. That is the
+//! whole tolerance; anything else is a failure.
+
+// Without Embree and obvhs only the BSP is checked, with the shared checks of `testing`.
+#![cfg_attr(
+    not(any(feature = "embree", feature = "obvhs")),
+    allow(dead_code, unused_imports)
+)]
+
+use std::sync::OnceLock;
+
+use coherent_accel::shapes::Rng;
+use coherent_accel::testing::{random_rays, random_scene, same_t};
+use coherent_accel::{Accel, BruteForce, EDGE_EPS, Hit1, Mesh, Ray1, Rays, Scene};
+use coherent_bsp::{Bsp, BspParams};
+use coherent_simd::{Backend, Kernel, Lanes, SimdMask};
+use glam::Vec3;
+use proptest::prelude::*;
+
+/// What the hits of an accelerator with its own exact triangle test are compared against:
+/// the scene (for the triangles' geometry).
+#[derive(Clone, Copy)]
+struct Ref<'a> {
+    scene: &'a Scene,
+}
+
+impl Ref<'_> {
+    /// The world-space vertices of the triangle `h` hit.
+    fn triangle(&self, h: &Hit1) -> [Vec3; 3] {
+        let inst = &self.scene.instances[h.inst as usize];
+        let tri = self.scene.meshes[inst.mesh].triangle(h.prim as usize);
+        tri.map(|p| inst.world_from_object.transform_point3(p))
+    }
+
+    /// The point `h`'s barycentrics give.
+    fn point(&self, h: &Hit1) -> Vec3 {
+        let [a, b, c] = self.triangle(h);
+        a * (1.0 - h.u - h.v) + b * h.u + c * h.v
+    }
+
+    /// `|cos|` of the angle between the ray and the normal of the triangle `h` hit.
+    fn cos(&self, h: &Hit1, r: &Ray1) -> f32 {
+        let [a, b, c] = self.triangle(h);
+        (b - a)
+            .cross(c - a)
+            .normalize_or_zero()
+            .dot(r.dir.normalize_or_zero())
+            .abs()
+    }
+
+    /// How far apart (world units) two exact tests may put the hit `h` of `r`: 1e-5 of the
+    /// distances involved, divided by the cosine of the incidence.
+    fn tolerance(&self, h: &Hit1, r: &Ray1) -> f32 {
+        let [p, q, s] = self.triangle(h);
+        let size = (q - p).length().max((s - q).length()).max((p - s).length());
+        let scale = r.origin.length() + (r.dir * h.t).length() + size;
+        1e-5 * scale / self.cos(h, r).max(1e-3) + 1e-6
+    }
+
+    /// A hit the two kinds of test may disagree on (see the module documentation).
+    fn fuzzy(&self, h: &Hit1, r: &Ray1) -> bool {
+        let [a, b, c] = self.triangle(h);
+        let area2 = (b - a).cross(c - a).length();
+        let longest = (b - a).length().max((c - b).length()).max((a - c).length());
+        let sliver = area2 <= 1e-3 * longest * longest;
+        // Within the reference's edge tolerance (4x) or the tests' precision of an edge:
+        // barycentric `l` of a vertex times the height over the opposite edge is the
+        // distance to that edge.
+        let tol = self.tolerance(h, r);
+        let near_edge = |l: f32, opposite: f32| {
+            let height = area2 / opposite;
+            l * height <= 4.0 * EDGE_EPS * height + tol
+        };
+        let w = 1.0 - h.u - h.v;
+        let border = near_edge(w, (c - b).length())
+            || near_edge(h.u, (a - c).length())
+            || near_edge(h.v, (b - a).length());
+        let bound = same_t(h.t, r.tmin) || (r.tmax.is_finite() && same_t(h.t, r.tmax));
+        let grazing = self.cos(h, r) < 1e-3;
+        border || bound || sliver || grazing
+    }
+
+    /// `a` and `b` are the same hit of `r`: the same triangle, and the points at `t` and at
+    /// the barycentrics within 1e-5 of the distances involved, divided by the cosine of the
+    /// incidence (`t` of a glancing hit is known to no better).
+    fn same(&self, a: &Hit1, b: &Hit1, r: &Ray1) -> bool {
+        if (a.inst, a.prim) != (b.inst, b.prim) {
+            return false;
+        }
+        let tol = self.tolerance(a, r);
+        (r.dir * (a.t - b.t)).length() <= tol && (self.point(a) - self.point(b)).length() <= tol
+    }
+}
+
+fn all_hits(a: &impl Accel, r: &Ray1) -> Vec<Hit1> {
+    let mut v = vec![];
+    a.intersect_all1(r, &mut |h| v.push(h));
+    v
+}
+
+/// The first hit `got` of `r` against the reference's hits `want` (all of them).
+fn check_first(c: Ref, want: &[Hit1], r: &Ray1, got: Option<Hit1>) -> Result<(), String> {
+    // Reference hits clearly nearer than `t` (not the same hit, not a tie, not fuzzy).
+    let nearer = |g: Option<&Hit1>, t: f32| {
+        want.iter().find(|h| {
+            h.t < t && !same_t(h.t, t) && !g.is_some_and(|g| c.same(h, g, r)) && !c.fuzzy(h, r)
+        })
+    };
+    if let Some(g) = &got {
+        let key = |h: &Hit1| (h.inst, h.prim);
+        if let Some(h) = want.iter().find(|h| key(h) == key(g)) {
+            if !c.same(h, g, r) && !c.fuzzy(h, r) {
+                return Err(format!("{r:?}: want {h:?}, got {g:?}"));
+            }
+        } else if !c.fuzzy(g, r) {
+            return Err(format!(
+                "{r:?}: got {g:?}, which the reference does not hit"
+            ));
+        }
+    }
+    match nearer(got.as_ref(), got.map_or(f32::INFINITY, |g| g.t)) {
+        None => Ok(()),
+        Some(h) => Err(format!("{r:?}: got {got:?}, but {h:?} is nearer")),
+    }
+}
+
+/// All hits `got` of `r` against the reference's `want`.
+fn check_all(c: Ref, want: &[Hit1], r: &Ray1, got: &[Hit1]) -> Result<(), String> {
+    let key = |h: &Hit1| (h.inst, h.prim);
+    for (i, g) in got.iter().enumerate() {
+        if got[..i].iter().any(|o| key(o) == key(g)) {
+            return Err(format!("{r:?}: {g:?} reported twice"));
+        }
+        let matched = want.iter().any(|w| c.same(w, g, r));
+        if !matched && !c.fuzzy(g, r) {
+            return Err(format!(
+                "{r:?}: all hits: got {g:?}, which the reference does not hit"
+            ));
+        }
+    }
+    for w in want {
+        let matched = got.iter().any(|g| c.same(w, g, r));
+        if !matched && !c.fuzzy(w, r) {
+            return Err(format!("{r:?}: all hits: missed {w:?}"));
+        }
+    }
+    Ok(())
+}
+
+/// Occlusion `got` of `r`; `got_hits` are the accelerator's own hits of `r`.
+fn check_occluded(
+    c: Ref,
+    want: &[Hit1],
+    r: &Ray1,
+    got: bool,
+    got_hits: &[Hit1],
+) -> Result<(), String> {
+    let solid = |hits: &[Hit1]| hits.iter().any(|h| !c.fuzzy(h, r));
+    let agree = got != want.is_empty();
+    if agree || (!got && !solid(want)) || (got && !got_hits.is_empty() && !solid(got_hits)) {
+        Ok(())
+    } else {
+        Err(format!("{r:?}: occluded {got}, reference hits {want:?}"))
+    }
+}
+
+/// Every query of `a`, single-ray and in packets of `L`, against the reference over `rays`.
+/// Packets use a random pattern of active lanes; inactive lanes must stay misses.
+fn check_queries<L: Lanes, A: Accel>(
+    l: L,
+    c: Ref,
+    bf: &BruteForce,
+    a: &A,
+    rays: &[Ray1],
+    mask_seed: u64,
+) -> Result<(), String> {
+    let name = a.name();
+    for r in rays {
+        let want = all_hits(bf, r);
+        check_first(c, &want, r, a.intersect1(r)).map_err(|e| format!("{name} intersect1: {e}"))?;
+        let got_all = all_hits(a, r);
+        check_all(c, &want, r, &got_all).map_err(|e| format!("{name} intersect_all1: {e}"))?;
+        check_occluded(c, &want, r, a.occluded1(r), &got_all)
+            .map_err(|e| format!("{name} occluded1: {e}"))?;
+    }
+    let mut rng = Rng::new(mask_seed);
+    for chunk in rays.chunks(L::N) {
+        let p = Rays::from_fn(l, |i| chunk[i % chunk.len()]);
+        let bits = if rng.next_u64().is_multiple_of(2) {
+            u32::MAX
+        } else {
+            rng.next_u64() as u32
+        };
+        let active = l.mask_from_fn(|i| i < chunk.len() && bits >> i & 1 == 1);
+        let hits = a.intersect(l, &p, active);
+        let occ = a.occluded(l, &p, active);
+        let mut all = vec![vec![]; L::N];
+        a.intersect_all(l, &p, active, &mut |i, h| all[i].push(h));
+        for (i, got_all) in all.iter().enumerate() {
+            let r = p.lane(i);
+            if active.lane(i) {
+                let want = all_hits(bf, &r);
+                let lane = |e: String| format!("{name} {}-wide lane {i}: {e}", L::N);
+                check_first(c, &want, &r, hits.lane(i)).map_err(lane)?;
+                check_all(c, &want, &r, got_all).map_err(lane)?;
+                check_occluded(c, &want, &r, occ.lane(i), got_all).map_err(lane)?;
+            } else if hits.lane(i).is_some() || occ.lane(i) || !got_all.is_empty() {
+                return Err(format!("{name}: inactive lane {i} reported a hit"));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The accelerators under test.
+#[derive(Clone, Copy, Debug)]
+enum Which {
+    Bsp,
+    #[cfg(feature = "embree")]
+    Embree,
+    #[cfg(feature = "obvhs")]
+    Obvhs(coherent::obvhs::Kind),
+}
+
+/// Builds `which` over `scene` and checks it; build failures are test failures (a missing
+/// Embree library included: its message names the fix).
+fn check_which<L: Lanes>(
+    l: L,
+    which: Which,
+    bf: &BruteForce,
+    scene: &Scene,
+    rays: &[Ray1],
+    seed: u64,
+) -> Result<(), String> {
+    let fail = |e: coherent_accel::AccelError| format!("{which:?}: build: {e}");
+    match which {
+        Which::Bsp => {
+            let a = Bsp::build(scene, &BspParams::default()).map_err(fail)?;
+            coherent_accel::testing::check_all_queries(l, bf, &a, rays, seed)
+        }
+        #[cfg(feature = "embree")]
+        Which::Embree => {
+            use coherent::embree::{Embree, EmbreeParams};
+            let a = Embree::build(scene, &EmbreeParams::default()).map_err(fail)?;
+            check_queries(l, Ref { scene }, bf, &a, rays, seed)
+        }
+        #[cfg(feature = "obvhs")]
+        Which::Obvhs(kind) => {
+            use coherent::obvhs::{Obvhs, ObvhsParams};
+            let a = Obvhs::build(
+                scene,
+                &ObvhsParams {
+                    kind,
+                    ..Default::default()
+                },
+            )
+            .map_err(fail)?;
+            check_queries(l, Ref { scene }, bf, &a, rays, seed)
+        }
+    }
+}
+
+/// One random scene and its rays.
+struct RandomScene {
+    which: Which,
+    seed: u64,
+    tris: usize,
+    meshes: usize,
+    instances: usize,
+}
+
+impl Kernel for RandomScene {
+    type Output = Result<(), String>;
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) -> Result<(), String> {
+        let scene = random_scene(self.seed, self.tris, self.meshes, self.instances);
+        let rays = random_rays(self.seed, &scene, 64);
+        let bf = BruteForce::build(&scene, &()).unwrap();
+        check_which(l, self.which, &bf, &scene, &rays, self.seed)
+    }
+}
+
+/// Edge cases: empty scene, one triangle hit at its vertices, edges and inside by
+/// axis-parallel rays and rays starting on it, and invalid rays beside valid ones.
+struct EdgeCases(Which);
+
+impl Kernel for EdgeCases {
+    type Output = Result<(), String>;
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) -> Result<(), String> {
+        let empty = Scene::default();
+        let bf = BruteForce::build(&empty, &()).unwrap();
+        check_which(l, self.0, &bf, &empty, &random_rays(1, &empty, 16), 1)?;
+        let tri = Scene::single(Mesh::new(
+            "one",
+            vec![
+                Vec3::ZERO,
+                Vec3::new(4.0, 0.0, 0.0),
+                Vec3::new(0.0, 4.0, 0.0),
+            ],
+            vec![[0, 1, 2]],
+        ));
+        let mut rays = vec![];
+        for p in [
+            Vec3::ZERO,
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(2.0, 2.0, 0.0),
+            Vec3::ONE,
+        ] {
+            rays.push(Ray1::infinite(p + Vec3::Z, -Vec3::Z));
+            rays.push(Ray1::infinite(p - Vec3::Z, Vec3::Z));
+            rays.push(Ray1::infinite(p - Vec3::X, Vec3::X));
+            rays.push(Ray1::infinite(p, Vec3::new(0.3, 0.2, 1.0)));
+            rays.push(Ray1::new(p + Vec3::Z, -Vec3::Z, -3.0, 0.5));
+        }
+        let bf = BruteForce::build(&tri, &()).unwrap();
+        check_which(l, self.0, &bf, &tri, &rays, 2)?;
+        let scene = random_scene(3, 200, 1, 2);
+        let o = Vec3::new(0.5, 0.5, -20.0);
+        let bad = [
+            Ray1::infinite(o, Vec3::ZERO),
+            Ray1::infinite(o, Vec3::new(f32::NAN, 0.0, 1.0)),
+            Ray1::infinite(o, Vec3::new(0.0, f32::INFINITY, 1.0)),
+            Ray1::infinite(Vec3::NAN, Vec3::Z),
+            Ray1::new(o, Vec3::Z, f32::NAN, 1.0),
+            Ray1::new(o, Vec3::Z, 0.0, f32::NAN),
+            Ray1::new(o, Vec3::Z, 5.0, 1.0),
+            Ray1::infinite(o, Vec3::splat(1e-30)),
+        ];
+        let good = random_rays(4, &scene, 32);
+        let mixed: Vec<Ray1> = good
+            .iter()
+            .zip(bad.iter().cycle())
+            .flat_map(|(g, b)| [*b, *g])
+            .collect();
+        let bf = BruteForce::build(&scene, &()).unwrap();
+        check_which(l, self.0, &bf, &scene, &mixed, 3)
+    }
+}
+
+/// A real mesh (the bunny and the dragon), placed twice with a rotation and a scale, and
+/// rays at it; the reference is built once per mesh.
+struct RealMeshes(Which);
+
+type RealScene = (String, Scene, BruteForce, Vec<Ray1>);
+
+fn real_scenes() -> &'static Result<Vec<RealScene>, String> {
+    static SCENES: OnceLock<Result<Vec<RealScene>, String>> = OnceLock::new();
+    SCENES.get_or_init(|| {
+        let mut out = vec![];
+        for name in ["dragon", "bunny"] {
+            let mesh = coherent::mesh_file::RealMesh::named(name)
+                .unwrap()
+                .load()
+                .map_err(|e| e.to_string())?;
+            let b = mesh.bounds();
+            let size = b.extent().max_element();
+            let mut scene = Scene::single(mesh);
+            scene.add_instance(
+                0,
+                glam::Affine3A::from_scale_rotation_translation(
+                    Vec3::splat(0.5),
+                    glam::Quat::from_rotation_y(0.7),
+                    Vec3::new(size, 0.0, 0.0),
+                ),
+            );
+            let rays = random_rays(name.len() as u64, &scene, 48);
+            let bf = BruteForce::build(&scene, &()).unwrap();
+            out.push((name.to_string(), scene, bf, rays));
+        }
+        Ok(out)
+    })
+}
+
+impl Kernel for RealMeshes {
+    type Output = Result<(), String>;
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) -> Result<(), String> {
+        let scenes = match real_scenes() {
+            Ok(s) => s,
+            // Meshes come from Debian packages; scripts/test.sh fetches them and asks for them.
+            Err(e) if std::env::var_os("COHERENT_REQUIRE_MESHES").is_none() => {
+                eprintln!("skipping the real-mesh check: {e}");
+                return Ok(());
+            }
+            Err(e) => return Err(e.clone()),
+        };
+        for (name, scene, bf, rays) in scenes {
+            check_which(l, self.0, bf, scene, rays, 5).map_err(|e| format!("{name}: {e}"))?;
+        }
+        Ok(())
+    }
+}
+
+/// Runs `k` on backend `b`, or says why it is skipped.
+fn on<K: Kernel<Output = Result<(), String>>>(b: Backend, k: K) {
+    match b.unavailable_reason() {
+        Some(why) => eprintln!("skipping backend {}: {why}", b.name()),
+        None => b
+            .run(k)
+            .unwrap()
+            .unwrap_or_else(|e| panic!("backend {}: {e}", b.name())),
+    }
+}
+
+/// Stamps the tests out for one accelerator and one lane backend.
+macro_rules! accel_tests {
+    ($name:ident, $which:expr, $backend:expr) => {
+        mod $name {
+            use super::*;
+            const B: Backend = $backend;
+
+            #[test]
+            fn edge_cases() {
+                on(B, EdgeCases($which));
+            }
+
+            #[test]
+            fn real_meshes() {
+                on(B, RealMeshes($which));
+            }
+
+            proptest! {
+                #![proptest_config(ProptestConfig::with_cases(6))]
+                #[test]
+                fn random_scenes(seed in any::<u64>(), tris in 1usize..250, meshes in 1usize..4, instances in 0usize..6) {
+                    on(B, RandomScene { which: $which, seed, tris, meshes, instances });
+                }
+            }
+        }
+    };
+}
+
+/// Every lane backend for one accelerator.
+macro_rules! accel_backends {
+    ($name:ident, $which:expr) => {
+        mod $name {
+            use super::*;
+            accel_tests!(scalar, $which, Backend::Scalar);
+            accel_tests!(sse, $which, Backend::Sse);
+            accel_tests!(wide4, $which, Backend::Wide4);
+            accel_tests!(wide8, $which, Backend::Wide8);
+            accel_tests!(wide16, $which, Backend::Wide16);
+            accel_tests!(pulp8, $which, Backend::Pulp8);
+            accel_tests!(pulp16, $which, Backend::Pulp16);
+        }
+    };
+}
+
+accel_backends!(bsp, Which::Bsp);
+#[cfg(feature = "embree")]
+accel_backends!(embree, Which::Embree);
+#[cfg(feature = "obvhs")]
+accel_backends!(obvhs_bvh2, Which::Obvhs(coherent::obvhs::Kind::Bvh2));
+#[cfg(feature = "obvhs")]
+accel_backends!(obvhs_cwbvh, Which::Obvhs(coherent::obvhs::Kind::Cwbvh));
