@@ -37,6 +37,7 @@ use crate::ctx::Ctx;
 use crate::experiment::{Experiment, Status};
 use crate::plot::{BarChart, LineChart, Series};
 use crate::table::{fmt_num, markdown_table};
+use crate::timing::median;
 
 pub const EXPERIMENT: Experiment = Experiment {
     name: "accel",
@@ -140,16 +141,6 @@ fn pass_any<A: Accel>(
     })
 }
 
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let m = v.len() / 2;
-    if v.len() % 2 == 1 {
-        v[m]
-    } else {
-        0.5 * (v[m - 1] + v[m])
-    }
-}
-
 /// Medians of interleaved samples of each configuration (`f(i)` times configuration `i`).
 fn interleaved(
     n: usize,
@@ -165,7 +156,7 @@ fn interleaved(
             v.push(f(i)?);
         }
     }
-    Ok(s.iter_mut().map(|v| median(v)).collect())
+    Ok(s.iter().map(|v| median(v)).collect())
 }
 
 /// One of the other accelerators, built.

@@ -23,7 +23,7 @@ use crate::ctx::Ctx;
 use crate::experiment::{Experiment, Status};
 use crate::plot::{BarChart, LineChart, Series};
 use crate::table::{fmt_num, markdown_table};
-use crate::timing::speedup;
+use crate::timing::{median, speedup};
 
 pub const EXPERIMENT: Experiment = Experiment {
     name: "kernels",
@@ -207,17 +207,6 @@ fn texture_lod(ctx: &Ctx, texture: &Texture, inputs: &TextureInputs) -> anyhow::
     ])?;
     csv.finish()?;
     Ok(())
-}
-
-fn median(v: &[f64]) -> f64 {
-    let mut v = v.to_vec();
-    v.sort_by(f64::total_cmp);
-    let m = v.len() / 2;
-    if v.len() % 2 == 1 {
-        v[m]
-    } else {
-        0.5 * (v[m - 1] + v[m])
-    }
 }
 
 struct Eval<'a> {

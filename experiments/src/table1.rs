@@ -30,7 +30,7 @@ use crate::ctx::Ctx;
 use crate::experiment::{Experiment, Status};
 use crate::plot::{BarChart, LineChart, Series};
 use crate::table::{PaperTable, fmt_num, markdown_table};
-use crate::timing::speedup;
+use crate::timing::{median, speedup};
 
 pub const EXPERIMENT: Experiment = Experiment {
     name: "table1",
@@ -137,17 +137,6 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     splits(ctx, &backends, &inputs)?;
     plots(ctx)?;
     Ok(())
-}
-
-fn median(v: &[f64]) -> f64 {
-    let mut v = v.to_vec();
-    v.sort_by(f64::total_cmp);
-    let m = v.len() / 2;
-    if v.len() % 2 == 1 {
-        v[m]
-    } else {
-        0.5 * (v[m - 1] + v[m])
-    }
 }
 
 /// The packet of vectors `k` starting at call `i`.

@@ -36,17 +36,26 @@ pub fn time<R>(warmup: usize, repeats: usize, mut f: impl FnMut() -> R) -> Timin
         })
         .collect();
     seconds.sort_by(f64::total_cmp);
-    let mid = repeats / 2;
-    let median = if repeats % 2 == 1 {
-        seconds[mid]
-    } else {
-        0.5 * (seconds[mid - 1] + seconds[mid])
-    };
     Timing {
-        median,
+        median: median(&seconds),
         min: seconds[0],
         max: seconds[repeats - 1],
         repeats,
+    }
+}
+
+/// The median of `v` (the mean of the two middle values for an even count); NaN when empty.
+pub fn median(v: &[f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    let m = v.len() / 2;
+    if v.len() % 2 == 1 {
+        v[m]
+    } else {
+        0.5 * (v[m - 1] + v[m])
     }
 }
 
