@@ -84,23 +84,11 @@ const TRAVERSAL_HEADER: &[&str] = &[
     "mailbox_hit_rate",
 ];
 
-/// The backend measured at each packet width: the hand-written or run-time dispatched one
-/// where usable, else `wide`.
-fn backend_for(width: usize) -> Option<Backend> {
-    let prefs: &[Backend] = match width {
-        4 => &[Backend::Sse, Backend::Wide4],
-        8 => &[Backend::Pulp8, Backend::Wide8],
-        16 => &[Backend::Pulp16, Backend::Wide16],
-        _ => &[],
-    };
-    prefs.iter().copied().find(|b| b.is_available())
-}
-
 /// Width 1 (single rays, `None`) and each packet width with its backend.
 fn widths(ctx: &mut Ctx) -> Vec<(usize, Option<Backend>)> {
     let mut v = vec![(1, None)];
     for w in [4, 8, 16] {
-        match backend_for(w) {
+        match Backend::preferred_for_lanes(w) {
             Some(b) => v.push((w, Some(b))),
             None => ctx.note(format!("accel: no backend gives width {w} here")),
         }

@@ -11,9 +11,9 @@
 use std::collections::BTreeMap;
 
 use coherent::kernels::{ApproxKernel, approx_inputs};
-use coherent::simd::approx::{Approx, Bound};
+use coherent::simd::Backend;
+use coherent::simd::approx::{Approx, Bound, EvalSlices};
 use coherent::simd::scalar::Scalar;
-use coherent::simd::{Backend, Kernel, Lanes};
 use coherent::texture::Texture;
 use coherent::texture::workload::{
     LodMethod, TextureInputs, TextureLookups, lod_at, pattern_texture,
@@ -147,7 +147,7 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     for f in Approx::ALL {
         let (a, b) = sweep(f, n);
         for &backend in &backends {
-            let got = backend.run(Eval { f, a: &a, b: &b })?;
+            let got = backend.run(EvalSlices { f, a: &a, b: &b })?;
             let (err, bound, kind) = max_error(f, &a, &b, &got);
             acc.row(&[
                 &f.name(),
@@ -207,30 +207,6 @@ fn texture_lod(ctx: &Ctx, texture: &Texture, inputs: &TextureInputs) -> anyhow::
     ])?;
     csv.finish()?;
     Ok(())
-}
-
-struct Eval<'a> {
-    f: Approx,
-    a: &'a [f32],
-    b: &'a [f32],
-}
-
-impl Kernel for Eval<'_> {
-    type Output = Vec<f32>;
-    #[inline(always)]
-    fn run<L: Lanes>(self, l: L) -> Vec<f32> {
-        let mut out = vec![0.0; self.a.len()];
-        let f = self.f;
-        coherent::simd::slices::map2(
-            l,
-            self.a,
-            self.b,
-            &mut out,
-            #[inline(always)]
-            |x, y| f.eval(l, x, y),
-        );
-        out
-    }
 }
 
 /// A uniform sweep of the domain (log-spaced for log, whose domain spans decades).

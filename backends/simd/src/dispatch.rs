@@ -152,6 +152,19 @@ impl Backend {
             .collect()
     }
 
+    /// The usable backend to measure at a packet width: the hand-written or run-time
+    /// dispatched one (scalar, sse, pulp8, pulp16) where this CPU runs it, else `wide`.
+    pub fn preferred_for_lanes(lanes: usize) -> Option<Backend> {
+        let prefs: &[Backend] = match lanes {
+            1 => &[Backend::Scalar],
+            4 => &[Backend::Sse, Backend::Wide4],
+            8 => &[Backend::Pulp8, Backend::Wide8],
+            16 => &[Backend::Pulp16, Backend::Wide16],
+            _ => &[],
+        };
+        prefs.iter().copied().find(|b| b.is_available())
+    }
+
     fn available_list() -> String {
         Backend::available()
             .iter()
@@ -266,6 +279,17 @@ mod tests {
     #[test]
     fn scalar_always_available() {
         assert!(Backend::available().contains(&Backend::Scalar));
+    }
+
+    #[test]
+    fn preferred_backend_has_the_width_and_runs_here() {
+        assert_eq!(Backend::preferred_for_lanes(1), Some(Backend::Scalar));
+        for n in [4, 8, 16] {
+            if let Some(b) = Backend::preferred_for_lanes(n) {
+                assert!(b.lanes() == n && b.is_available());
+            }
+        }
+        assert_eq!(Backend::preferred_for_lanes(3), None);
     }
 
     struct Lanes_;

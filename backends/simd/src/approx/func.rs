@@ -152,3 +152,30 @@ impl core::str::FromStr for Approx {
             })
     }
 }
+
+/// `out[i] = f(a[i], b[i])` for an approximation over slices (tail padded), on any backend:
+/// `Backend::run(EvalSlices { .. })`. Used by the accuracy sweeps of the tests and of the
+/// `kernels` experiment.
+pub struct EvalSlices<'a> {
+    pub f: Approx,
+    pub a: &'a [f32],
+    pub b: &'a [f32],
+}
+
+impl crate::dispatch::Kernel for EvalSlices<'_> {
+    type Output = Vec<f32>;
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) -> Vec<f32> {
+        let mut out = vec![0.0; self.a.len()];
+        let f = self.f;
+        crate::slices::map2(
+            l,
+            self.a,
+            self.b,
+            &mut out,
+            #[inline(always)]
+            |x, y| f.eval(l, x, y),
+        );
+        out
+    }
+}

@@ -15,7 +15,7 @@ mod tables;
 mod trig;
 
 pub use exp::{EXP_MAX_REL_ERROR, exp};
-pub use func::{Approx, Bound, POW_MAX, POW_Y};
+pub use func::{Approx, Bound, EvalSlices, POW_MAX, POW_Y};
 pub use log::{LOG_MAX_ABS_ERROR, log};
 pub use pow::{POW_MAX_REL_ERROR, PowRange, pow};
 pub use trig::{

@@ -3,37 +3,13 @@
 
 use proptest::prelude::*;
 
-use super::{Approx, Bound};
-use crate::dispatch::{Backend, Kernel};
-use crate::lanes::Lanes;
-use crate::slices::map2;
-
-struct Eval<'a> {
-    f: Approx,
-    a: &'a [f32],
-    b: &'a [f32],
-}
-
-impl Kernel for Eval<'_> {
-    type Output = Vec<f32>;
-    #[inline(always)]
-    fn run<L: Lanes>(self, l: L) -> Vec<f32> {
-        let mut out = vec![0.0; self.a.len()];
-        let f = self.f;
-        map2(
-            l,
-            self.a,
-            self.b,
-            &mut out,
-            #[inline(always)]
-            |x, y| f.eval(l, x, y),
-        );
-        out
-    }
-}
+use super::{Approx, Bound, EvalSlices};
+use crate::dispatch::Backend;
 
 fn eval(backend: Backend, f: Approx, a: &[f32], b: &[f32]) -> Vec<f32> {
-    backend.run(Eval { f, a, b }).expect("available backend")
+    backend
+        .run(EvalSlices { f, a, b })
+        .expect("available backend")
 }
 
 /// The arguments of a dense sweep over the domain (log-spaced where the domain spans decades).
