@@ -13,6 +13,7 @@ pub use coherent_obvhs as obvhs;
 pub mod approx;
 pub mod bdf;
 pub mod kernels;
+pub mod light;
 pub mod machine;
 pub mod material;
 pub mod mesh_file;
