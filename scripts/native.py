@@ -9,13 +9,15 @@
           and EULUMDAT examples inside the lidrs crate 0.2.3 (crates.io, MIT) and the six
           manufacturer .ldt fixtures of the eulumdat 0.7.1 sdist (PyPI), into
           .cache/photometry/.
+  hdr     Real HDR latitude-longitude maps: the eight CC0 studio-light worlds of Debian's
+          blender-data 3.4.1 (DWAB-compressed EXR, which the exr crate reads), into .cache/hdr/.
 
 Idempotent and quiet when everything is in place: files already there are checked against
 their recorded sha256 and only fetched again when missing or changed. Exit status: 0 when
 Embree is usable (a mesh that cannot be fetched is a warning: the experiments say so and go
 on without it), 1 when Embree could not be set up (the message names the cause and the fix).
 
-Usage: python3 scripts/native.py [embree] [meshes] [photometry]      (no argument: all)
+Usage: python3 scripts/native.py [embree] [meshes] [photometry] [hdr]      (no argument: all)
 Environment: EMBREE_DIR=<an Embree 4 install> skips the wheel (the backend loads from there).
 """
 
@@ -35,6 +37,17 @@ ROOT = Path(__file__).resolve().parent.parent
 NATIVE = ROOT / ".native"
 MESHES = ROOT / ".cache" / "meshes"
 PHOTOMETRY = ROOT / ".cache" / "photometry"
+HDR = ROOT / ".cache" / "hdr"
+
+# Debian bookworm's blender-data: the studio-light world maps (CC0, see its license.txt).
+HDR_DEB = {
+    "package": "blender-data",
+    "version": "3.4.1+dfsg-2",
+    "sha256": "5ceaf56a49ba3ded95c751d739aeec3d19e7fad76fba5cb70666986af9303b0e",
+    "folder": "usr/share/blender/datafiles/studiolights/world",
+    "members": ["city.exr", "courtyard.exr", "forest.exr", "interior.exr", "night.exr",
+                "studio.exr", "sunrise.exr", "sunset.exr", "license.txt"],
+}
 
 # The Embree 4.4 library as built by the embreex project (manylinux, x86-64). The wheel is
 # tagged per CPython version; the library inside is the same, so one exact file is pinned
@@ -309,11 +322,30 @@ def setup_photometry():
         write_marker(PHOTOMETRY, sorted(names))
 
 
+def setup_hdr():
+    """Fetches the HDR maps; a failure is reported and the rest goes on."""
+    if marker_ok(HDR):
+        return
+    spec = HDR_DEB
+    try:
+        say(f"fetching HDR maps from Debian package {spec['package']}={spec['version']} (31 MB)")
+        HDR.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory(dir=HDR) as tmp:
+            deb = apt_download(spec["package"], spec["version"], tmp)
+            verify(deb, spec["sha256"], f"{spec['package']}={spec['version']}")
+            members = [(f"{spec['folder']}/{m}", m) for m in spec["members"]]
+            names = deb_members(deb, lambda _root: members, HDR)
+        write_marker(HDR, names)
+    except (SetupError, OSError) as e:
+        say(f"warning: HDR maps unavailable: {e}")
+
+
 def main(argv):
-    what = set(argv) or {"embree", "meshes", "photometry"}
-    unknown = what - {"embree", "meshes", "photometry"}
+    steps = {"embree", "meshes", "photometry", "hdr"}
+    what = set(argv) or steps
+    unknown = what - steps
     if unknown:
-        say(f"unknown step(s) {sorted(unknown)}; steps are: embree meshes photometry")
+        say(f"unknown step(s) {sorted(unknown)}; steps are: {' '.join(sorted(steps))}")
         return 2
     status = 0
     if "embree" in what:
@@ -327,6 +359,8 @@ def main(argv):
         setup_meshes()
     if "photometry" in what:
         setup_photometry()
+    if "hdr" in what:
+        setup_hdr()
     return status
 
 
