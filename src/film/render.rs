@@ -83,7 +83,7 @@ pub fn render<T: SampleTracer>(
         groups_skipped: 0,
         seconds: start.elapsed().as_secs_f64(),
         error: f64::NAN,
-        done: done_fraction(&film, None),
+        done: covered_fraction(&film),
         coherence: Coherence::default(),
     };
     progress(&PassReport {
@@ -99,6 +99,7 @@ pub fn render<T: SampleTracer>(
     let levels = Span::levels(tile);
     let mut next_index = 0u64;
     let mut pass = 0u32;
+    let mut pending: Option<(Vec<bool>, bool)> = None;
     let stop = loop {
         // What this pass traces: an index range, its span, and which pixels still need rays.
         let (span, begin, end, need) = match opts.method {
@@ -117,7 +118,10 @@ pub fn render<T: SampleTracer>(
                 if pass > 0 && time_budget.is_some_and(|t| start.elapsed() >= t) {
                     break StopReason::TimeBudget;
                 }
-                let (need, capped) = needed(&film, accuracy, max_samples_per_pixel);
+                // Which pixels need rays: computed once per pass (after the previous one).
+                let (need, capped) = pending
+                    .take()
+                    .unwrap_or_else(|| needed(&film, accuracy, max_samples_per_pixel));
                 if !need.iter().any(|&n| n) {
                     break if capped {
                         StopReason::SampleBudget
@@ -177,6 +181,19 @@ pub fn render<T: SampleTracer>(
             0.0
         };
         rays += this_pass;
+        let done = match opts.method {
+            Method::Adaptive {
+                accuracy,
+                max_samples_per_pixel,
+                ..
+            } => {
+                let (need, capped) = needed(&film, accuracy, max_samples_per_pixel);
+                let done = need.iter().filter(|n| !**n).count() as f64 / film.pixels() as f64;
+                pending = Some((need, capped));
+                done
+            }
+            Method::Uniform { .. } => covered_fraction(&film),
+        };
         record = PassRecord {
             pass,
             span,
@@ -187,7 +204,7 @@ pub fn render<T: SampleTracer>(
             groups_skipped: skipped,
             seconds: start.elapsed().as_secs_f64(),
             error: mean_error(&film),
-            done: done_fraction(&film, Some(opts)),
+            done,
             coherence: coh,
         };
         progress(&PassReport {
@@ -301,20 +318,12 @@ fn mean_error(film: &Film) -> f64 {
     if n == 0 { f64::NAN } else { s / n as f64 }
 }
 
-fn done_fraction(film: &Film, opts: Option<&FilmOptions>) -> f64 {
-    let done = match opts.map(|o| o.method) {
-        Some(Method::Adaptive {
-            accuracy,
-            max_samples_per_pixel,
-            ..
-        }) => {
-            let (need, _) = needed(film, accuracy, max_samples_per_pixel);
-            need.iter().filter(|n| !**n).count()
-        }
-        Some(Method::Uniform { .. }) => (0..film.pixels()).filter(|&p| film.samples(p) > 0).count(),
-        None => film.interpolated.iter().filter(|i| **i).count(),
-    };
-    done as f64 / film.pixels() as f64
+/// Fraction of pixels sampled or interpolated (the `done` of pre-render and uniform passes).
+fn covered_fraction(film: &Film) -> f64 {
+    let n = (0..film.pixels())
+        .filter(|&p| film.interpolated[p] || film.samples(p) > 0)
+        .count();
+    n as f64 / film.pixels() as f64
 }
 
 /// One tile's share of a pass.

@@ -20,7 +20,7 @@ use coherent_simd::approx::{EXP_MAX_REL_ERROR, LOG_MAX_ABS_ERROR, PowRange};
 use coherent_simd::{Lanes, Rgbs, SimdF32, SimdMask};
 
 /// A global tone-mapping operator.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Operator {
     /// Tumblin and Rushmeier 1993 (standing in for the paper's reference [22]).
     #[default]
