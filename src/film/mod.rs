@@ -16,7 +16,7 @@ mod tests;
 use std::path::PathBuf;
 use std::time::Duration;
 
-pub use accuracy::relative_difference;
+pub use accuracy::display_difference;
 pub use matrix::{Film, ScreenMatrix, matrix_of};
 pub use render::render;
 pub use superpixel::Superpixels;
@@ -31,8 +31,9 @@ use coherent_simd::BackendError;
 pub enum Method {
     /// The paper's progressive adaptive anti-aliasing: superpixels interpolated where their
     /// corners agree, then levels of growing span; a pixel is done when its two screen
-    /// matrices agree within `accuracy` (relative) over its 3x3 neighbourhood, or it has
-    /// `max_samples_per_pixel` samples. Stops when every pixel is done or the time runs out.
+    /// matrices agree within `accuracy` (in tone-mapped display units, 0-1) over its 3x3
+    /// neighbourhood, or it has `max_samples_per_pixel` samples. Stops when every pixel is
+    /// done or the time runs out.
     Adaptive {
         accuracy: f32,
         max_samples_per_pixel: u32,
@@ -171,7 +172,7 @@ pub struct PassRecord {
     pub groups_skipped: u64,
     /// Seconds since the render started.
     pub seconds: f64,
-    /// Mean relative difference of the two screen matrices over pixels sampled in both.
+    /// Mean display difference of the two screen matrices over pixels sampled in both.
     pub error: f64,
     /// Fraction of pixels done (met the accuracy, interpolated or at the sample cap).
     pub done: f64,

@@ -3,6 +3,9 @@
 //! each calling `Backend::run`), accumulated in a fixed order so that the image does not
 //! depend on the thread count.
 
+// Per-packet code uses index loops over lanes (see the README's notes on pulp).
+#![allow(clippy::needless_range_loop)]
+
 use std::time::Instant;
 
 use coherent_simd::{Backend, Kernel, Lanes, MAX_LANES, SimdF32, SimdMask};
@@ -58,17 +61,11 @@ pub fn render<T: SampleTracer>(
         *c = fix(v, &mut fixups);
     }
     let adaptation = Adaptation::from_luminances(sp.corners.iter().map(|c| luminance(*c)));
-    // Noise floor of the accuracy measure: 5% of the pre-render's mean luminance (not of its
-    // log average, which black regions drag towards 0 and with it every dark pixel's
-    // relative difference towards 2).
-    let mean_lum =
-        sp.corners.iter().map(|c| luminance(*c) as f64).sum::<f64>() / sp.corners.len() as f64;
-    let floor = ((0.05 * mean_lum) as f32).max(1e-12);
     let tonemap = ToneMap::new(opts.tonemap, adaptation, opts.display);
     let id_base = points.len() as u64;
     let mut rays = points.len() as u64;
 
-    let mut film = Film::new(w, h, sp, floor);
+    let mut film = Film::new(w, h, sp, tonemap);
     if let Method::Adaptive { accuracy, .. } = opts.method {
         mark_interpolated(&mut film, accuracy);
     }
@@ -256,7 +253,7 @@ fn mark_interpolated(film: &mut Film, accuracy: f32) {
     let sp = &film.superpixels;
     for v in 0..sp.ny {
         for u in 0..sp.nx {
-            if !sp.smooth(u, v, accuracy, film.floor) {
+            if !sp.smooth(u, v, accuracy, &film.tonemap) {
                 continue;
             }
             for y in v * sp.sy..((v + 1) * sp.sy).min(film.height) {
