@@ -174,12 +174,15 @@ fn rmse(t: &ToneMap, a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {
     (s / (3 * a.len().max(1)) as f64).sqrt()
 }
 
-/// Renders and records, per pass, (record, seconds without the recording, image).
+/// Per pass: its record, its seconds without the recording, the image so far.
+type Passes = Vec<(PassRecord, f64, Vec<[f32; 3]>)>;
+
+/// Renders and records every pass.
 fn passes(
     backend: Backend,
     tracer: &LambertTracer,
     opts: &FilmOptions,
-) -> anyhow::Result<(Vec<(PassRecord, f64, Vec<[f32; 3]>)>, film::Rendered<u64>)> {
+) -> anyhow::Result<(Passes, film::Rendered<u64>)> {
     // The callback's own time (copying the image) is left out of the pass times.
     let spent = Mutex::new((0.0f64, Vec::new()));
     let r = film::render(backend, tracer, opts, &|p: &PassReport| {
@@ -268,13 +271,15 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// (rays, seconds, rmse) per run (`uniform`, `adaptive 0.05`, ...), in pass order.
-#[allow(clippy::type_complexity)]
-fn curves(ctx: &Ctx) -> anyhow::Result<Option<Vec<(String, Vec<(f64, f64, f64)>)>>> {
+/// (rays, seconds, rmse) per pass, per run (`uniform`, `adaptive 0.01`, ...).
+type Curves = Vec<(String, Vec<(f64, f64, f64)>)>;
+
+/// The runs of `aa.csv`, in pass order.
+fn curves(ctx: &Ctx) -> anyhow::Result<Option<Curves>> {
     let Some(t) = ctx.read_csv(FILE, HEADER)? else {
         return Ok(None);
     };
-    let mut out: Vec<(String, Vec<(f64, f64, f64)>)> = Vec::new();
+    let mut out: Curves = Vec::new();
     for r in 0..t.len() {
         let acc = t.get(r, "accuracy")?;
         let key = if acc.is_empty() {
