@@ -32,7 +32,8 @@ pub enum Method {
     /// The paper's progressive adaptive anti-aliasing: superpixels interpolated where their
     /// corners agree, then levels of growing span; a pixel is done when its two screen
     /// matrices agree within `accuracy` (in tone-mapped display units, 0-1) over its 3x3
-    /// neighbourhood, or it has `max_samples_per_pixel` samples. Stops when every pixel is
+    /// neighbourhood, or it has `max_samples_per_pixel` samples (a pass may overshoot the cap
+    /// by less than one packet: a group traces all its lanes). Stops when every pixel is
     /// done or the time runs out.
     Adaptive {
         accuracy: f32,
@@ -133,8 +134,8 @@ impl FilmOptions {
             ));
         }
         let corners = (w.div_ceil(sx) as u64 + 1) * (h.div_ceil(sy) as u64 + 1);
-        // Adaptive passes may overshoot the cap by one packet of samples per pixel.
-        let ids = corners + (spp as u64 + 16) * w as u64 * h as u64;
+        // Adaptive passes may overshoot the cap by a few packets of samples per pixel.
+        let ids = corners + (spp as u64 + 64) * w as u64 * h as u64;
         if ids > u32::MAX as u64 {
             return Err(FilmError::Options(format!(
                 "{spp} samples per pixel at {w}x{h}: more samples than 2^32 sample ids"

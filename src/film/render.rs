@@ -265,32 +265,32 @@ fn mark_interpolated(film: &mut Film, accuracy: f32) {
     }
 }
 
-/// The largest matrix difference over the 3x3 neighbourhood of `(x, y)` (neighbours without
-/// samples in both matrices are left out), or `None` if `(x, y)` itself has none.
-fn neighbourhood_error(film: &Film, x: u32, y: u32) -> Option<f32> {
-    let p = (y * film.width + x) as usize;
-    let mut e = film.error(p)?;
-    for ny in y.saturating_sub(1)..(y + 2).min(film.height) {
-        for nx in x.saturating_sub(1)..(x + 2).min(film.width) {
-            if let Some(q) = film.error((ny * film.width + nx) as usize) {
-                e = e.max(q);
-            }
-        }
-    }
-    Some(e)
-}
-
-/// Which pixels need more rays, and whether any stopped at the sample cap unconverged.
+/// Which pixels need more rays, and whether any stopped at the sample cap unconverged. A
+/// pixel is done when it is interpolated, or when it and every neighbour of its 3x3
+/// neighbourhood sampled in both matrices have a matrix difference within `accuracy`
+/// (neighbours make edges robust: two estimates of an edge pixel may agree by chance).
 fn needed(film: &Film, accuracy: f32, cap: u32) -> (Vec<bool>, bool) {
+    let (w, h) = (film.width, film.height);
+    let errors: Vec<Option<f32>> = (0..film.pixels()).map(|p| film.error(p)).collect();
     let mut capped = false;
     let mut need = vec![false; film.pixels()];
-    for y in 0..film.height {
-        for x in 0..film.width {
-            let p = (y * film.width + x) as usize;
+    for y in 0..h {
+        for x in 0..w {
+            let p = (y * w + x) as usize;
             if film.interpolated[p] {
                 continue;
             }
-            let met = neighbourhood_error(film, x, y).is_some_and(|e| e <= accuracy);
+            let met = errors[p].is_some() && {
+                let mut e = 0.0f32;
+                for ny in y.saturating_sub(1)..(y + 2).min(h) {
+                    for nx in x.saturating_sub(1)..(x + 2).min(w) {
+                        if let Some(q) = errors[(ny * w + nx) as usize] {
+                            e = e.max(q);
+                        }
+                    }
+                }
+                e <= accuracy
+            };
             if met {
                 continue;
             }
