@@ -1,0 +1,129 @@
+//! The two screen matrices of the progressive film (paper section 6.2): each holds a colour
+//! sum and a sample count per pixel; a pixel's samples go alternately to one and the other,
+//! and the difference of their estimates measures the accuracy.
+
+use super::accuracy::display_difference;
+use super::superpixel::Superpixels;
+use crate::tonemap::ToneMap;
+
+/// Which matrix sample number `k` of pixel `p` goes to. Not simply `k % 2`: a pixel's
+/// Halton samples of even and odd `k` lie in its left and right halves (the lowest binary
+/// digit of the index above the tile's digits is `k`'s), so the two matrices would estimate
+/// different things and never agree at an edge. Each pair `(2j, 2j + 1)` is split between
+/// the matrices, which one gets the first decided by a hash of `(p, j)`: each matrix gets
+/// half the samples, stratified in expectation.
+#[inline]
+pub fn matrix_of(p: u64, k: u64) -> usize {
+    let mut h =
+        p.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ (k >> 1).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    h ^= h >> 31;
+    h = h.wrapping_mul(0x94d0_49bb_1331_11eb);
+    h ^= h >> 29;
+    ((k ^ (h >> 7)) & 1) as usize
+}
+
+/// Colour sums and sample counts per pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScreenMatrix {
+    pub sum: Vec<[f64; 3]>,
+    pub count: Vec<u32>,
+}
+
+impl ScreenMatrix {
+    fn new(pixels: usize) -> ScreenMatrix {
+        ScreenMatrix {
+            sum: vec![[0.0; 3]; pixels],
+            count: vec![0; pixels],
+        }
+    }
+    /// Mean colour of pixel `p` (zero without samples).
+    pub fn mean(&self, p: usize) -> [f32; 3] {
+        let n = self.count[p];
+        if n == 0 {
+            return [0.0; 3];
+        }
+        let s = self.sum[p];
+        let k = 1.0 / n as f64;
+        [(s[0] * k) as f32, (s[1] * k) as f32, (s[2] * k) as f32]
+    }
+}
+
+/// The film: two screen matrices (always the image's resolution), the superpixel corners
+/// and which pixels are interpolated from them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Film {
+    pub width: u32,
+    pub height: u32,
+    pub matrices: [ScreenMatrix; 2],
+    pub superpixels: Superpixels,
+    /// Pixels whose value is interpolated from their superpixel's corners (until they have
+    /// samples in both matrices).
+    pub interpolated: Vec<bool>,
+    /// The tone mapping the accuracy is measured through (see [`display_difference`]).
+    pub tonemap: ToneMap,
+}
+
+impl Film {
+    pub(crate) fn new(width: u32, height: u32, superpixels: Superpixels, tonemap: ToneMap) -> Film {
+        let n = width as usize * height as usize;
+        Film {
+            width,
+            height,
+            matrices: [ScreenMatrix::new(n), ScreenMatrix::new(n)],
+            superpixels,
+            interpolated: vec![false; n],
+            tonemap,
+        }
+    }
+
+    pub fn pixels(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+
+    /// Samples in pixel `p`, both matrices.
+    pub fn samples(&self, p: usize) -> u32 {
+        self.matrices[0].count[p] + self.matrices[1].count[p]
+    }
+
+    /// Adds sample number `k` of pixel `p` to matrix [`matrix_of`]`(p, k)`.
+    #[inline]
+    pub(crate) fn add(&mut self, p: usize, k: u64, c: [f32; 3]) {
+        let m = &mut self.matrices[matrix_of(p as u64, k)];
+        m.count[p] += 1;
+        for (s, v) in m.sum[p].iter_mut().zip(c) {
+            *s += v as f64;
+        }
+    }
+
+    /// The display difference of the two matrices' estimates at `p`, or `None` unless both
+    /// have samples there.
+    pub fn error(&self, p: usize) -> Option<f32> {
+        let [a, b] = &self.matrices;
+        (a.count[p] > 0 && b.count[p] > 0)
+            .then(|| display_difference(&self.tonemap, a.mean(p), b.mean(p)))
+    }
+
+    /// The estimate of pixel `p`: the mean of all its samples; the superpixel interpolation
+    /// where the pixel is interpolated and not yet sampled in both matrices, or has no sample.
+    pub fn pixel(&self, p: usize) -> [f32; 3] {
+        let n = self.samples(p);
+        let both = self.matrices[0].count[p] > 0 && self.matrices[1].count[p] > 0;
+        if n == 0 || (self.interpolated[p] && !both) {
+            let (x, y) = (p as u32 % self.width, p as u32 / self.width);
+            return self.superpixels.interpolate(x, y);
+        }
+        let mut c = [0.0f64; 3];
+        for m in &self.matrices {
+            for (ci, s) in c.iter_mut().zip(m.sum[p]) {
+                *ci += s;
+            }
+        }
+        let k = 1.0 / n as f64;
+        [(c[0] * k) as f32, (c[1] * k) as f32, (c[2] * k) as f32]
+    }
+
+    /// The whole image, row by row.
+    pub fn estimate(&self) -> Vec<[f32; 3]> {
+        (0..self.pixels()).map(|p| self.pixel(p)).collect()
+    }
+}
