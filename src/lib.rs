@@ -12,10 +12,14 @@ pub use coherent_obvhs as obvhs;
 
 pub mod approx;
 pub mod bdf;
+pub mod film;
 pub mod kernels;
+pub mod light;
 pub mod machine;
 pub mod material;
 pub mod mesh_file;
 pub mod scene;
+pub mod sampler;
 pub mod tabulated;
 pub mod texture;
+pub mod tonemap;
