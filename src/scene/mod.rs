@@ -37,7 +37,7 @@ pub struct RenderScene {
     /// Mesh id + world_from_object.
     pub instances: Vec<Instance>,
     pub materials: Vec<Material>,
-    // TODO(lights): `pub lights: Vec<crate::light::Light>` once the lights branch is merged.
+    pub lights: Vec<crate::light::Light>,
     pub camera: Camera,
     pub width: u32,
     pub height: u32,
@@ -45,7 +45,7 @@ pub struct RenderScene {
     pub depth: u32,
     pub spp: Option<u32>,
     pub accuracy: Option<f32>,
-    // TODO(film): `pub tonemap: crate::tonemap::Operator` once the film branch is merged.
+    pub tonemap: crate::tonemap::Operator,
     /// Radiance of rays that miss (plus any environment light).
     pub background: [f32; 3],
     /// Keyframed instance transforms (top level rebuilt per frame).
@@ -121,6 +121,13 @@ impl RenderScene {
                 scene: self.name.clone(),
                 source,
             })?;
+        }
+        if self.lights.is_empty() && self.background.iter().all(|&v| v == 0.0) {
+            return Err(bad(
+                "lights",
+                "the scene has no light and a black background: the image would be black"
+                    .to_string(),
+            ));
         }
         if self.instances.is_empty() {
             return Err(bad("instances", "the scene has no object".to_string()));

@@ -9,6 +9,10 @@ use std::path::Path;
 
 use super::{Camera, RenderScene, SceneError};
 use coherent_accel::Instance;
+use glam::Vec3;
+
+use crate::light::{Light, Omni};
+use crate::tonemap::Operator;
 
 pub use cornell::cornell;
 
@@ -38,6 +42,8 @@ pub fn bare_mesh(path: &Path) -> Result<RenderScene, SceneError> {
         meshes: vec![file.mesh],
         instances: vec![Instance::identity(0)],
         materials: file.materials,
+        lights: vec![default_light(b.min, b.max)],
+        tonemap: Operator::default(),
         camera: Camera::framing(b.min, b.max),
         width,
         height,
@@ -47,4 +53,17 @@ pub fn bare_mesh(path: &Path) -> Result<RenderScene, SceneError> {
         background: [0.05; 3],
         motion: Vec::new(),
     })
+}
+
+/// The default light of a bare mesh: an omni light above and behind the default camera
+/// ([`Camera::framing`]), bright enough to give the near side of the box a radiance of
+/// about one.
+pub fn default_light(min: Vec3, max: Vec3) -> Light {
+    let center = 0.5 * (min + max);
+    let radius = (0.5 * (max - min).length()).max(1e-3);
+    let position = center + Vec3::new(-0.5, 2.0, 1.5) * radius;
+    let d2 = (position - center).length_squared();
+    // A Lambertian surface of albedo 0.6 facing the light at distance d: L = 0.6 I / (pi d^2).
+    let intensity = d2 * std::f32::consts::PI / 0.6 * 0.8;
+    Light::Omni(Omni::new(position, [intensity; 3]).expect("finite position and intensity"))
 }
