@@ -5,6 +5,9 @@
 pub mod builtin;
 pub mod camera;
 pub mod error;
+pub mod file;
+#[cfg(test)]
+mod file_tests;
 pub mod motion;
 pub mod shaded;
 
@@ -185,7 +188,7 @@ impl RenderScene {
 /// Mesh file extensions [`load`] takes as a bare mesh.
 pub const MESH_EXTENSIONS: [&str; 3] = ["obj", "ply", "off"];
 
-/// A scene file (.toml), a built-in scene's name, or a bare mesh file (framed by a default
+/// A scene file (.toml, see [`file`]), a built-in scene's name, or a bare mesh file (framed by a default
 /// camera and light).
 pub fn load(spec: &str) -> Result<RenderScene, SceneError> {
     let path = Path::new(spec);
@@ -195,6 +198,7 @@ pub fn load(spec: &str) -> Result<RenderScene, SceneError> {
         .map(str::to_ascii_lowercase);
     let scene = match ext.as_deref() {
         Some(e) if MESH_EXTENSIONS.contains(&e) => builtin::bare_mesh(path)?,
+        Some("toml") => file::load_file(path)?,
         _ => match builtin::by_name(spec) {
             Some(s) => s,
             None => {
