@@ -17,9 +17,12 @@
 
 pub mod circular;
 pub mod direct;
+pub mod environment;
+pub mod goniodiagram;
 pub mod linear;
 pub mod omni;
 pub mod parallel;
+pub mod photometry;
 pub mod rectangular;
 pub mod sincos;
 pub mod spot;
@@ -34,6 +37,8 @@ use thiserror::Error;
 
 pub use circular::Circular;
 pub use direct::Direct;
+pub use environment::Environment;
+pub use goniodiagram::{GonioLookup, Goniodiagram};
 pub use linear::Linear;
 pub use omni::Omni;
 pub use parallel::Parallel;
@@ -51,6 +56,8 @@ pub enum Light {
     Linear(Linear),
     Circular(Circular),
     Rectangular(Rectangular),
+    Goniodiagram(Goniodiagram),
+    Environment(Environment),
 }
 
 /// The kinds of light, by the names used in scene files and results.
@@ -270,16 +277,23 @@ impl Light {
             Light::Linear(_) => LightKind::Linear,
             Light::Circular(_) => LightKind::Circular,
             Light::Rectangular(_) => LightKind::Rectangular,
+            Light::Goniodiagram(_) => LightKind::Goniodiagram,
+            Light::Environment(_) => LightKind::Environment,
         }
     }
 
     /// Sample points per shading point (1 for point lights).
     pub fn samples(&self) -> u32 {
         match self {
-            Light::Omni(_) | Light::Spot(_) | Light::Parallel(_) | Light::Direct(_) => 1,
+            Light::Omni(_)
+            | Light::Spot(_)
+            | Light::Parallel(_)
+            | Light::Direct(_)
+            | Light::Goniodiagram(_) => 1,
             Light::Linear(x) => x.samples(),
             Light::Circular(x) => x.samples(),
             Light::Rectangular(x) => x.samples(),
+            Light::Environment(x) => x.samples(),
         }
     }
 
@@ -305,6 +319,8 @@ impl Light {
             Light::Linear(x) => x.sample(l, p, n, active, k, u),
             Light::Circular(x) => x.sample(l, p, n, active, k, u),
             Light::Rectangular(x) => x.sample(l, p, n, active, k, u),
+            Light::Goniodiagram(x) => x.sample(l, p, n, active),
+            Light::Environment(x) => x.sample(l, p, n, active, u),
         }
     }
 
@@ -312,8 +328,10 @@ impl Light {
     /// environment map's radiance, zero for the other kinds.
     #[inline(always)]
     pub fn radiance_seen<L: Lanes>(&self, l: L, dir: &Vec3s<L>) -> Rgbs<L> {
-        let _ = dir;
-        Rgbs::zero(l)
+        match self {
+            Light::Environment(x) => x.radiance(l, dir),
+            _ => Rgbs::zero(l),
+        }
     }
 }
 
