@@ -29,7 +29,8 @@
 //! keyframes = [{ time = 1.0, translate = [0, 1, 0] }]   # optional motion
 //!
 //! [[lights]]
-//! type = "omni"                   # omni | spot | parallel | direct | linear | circular | rectangular
+//! type = "omni"                   # omni | spot | parallel | direct | linear | circular |
+//!                                 # rectangular | environment (file = "sky.exr")
 //! position = [0, 3, 0]
 //! intensity = [10, 10, 10]
 //! ```
@@ -224,6 +225,27 @@ enum LightSpec {
         #[serde(default = "rectangular_grid")]
         grid: [u32; 2],
     },
+    Environment {
+        file: String,
+        #[serde(default = "unit")]
+        scale: f32,
+        #[serde(default = "y_up")]
+        up: V3,
+        #[serde(default = "minus_z")]
+        forward: V3,
+        #[serde(default = "environment_samples")]
+        samples: u32,
+    },
+}
+
+fn unit() -> f32 {
+    1.0
+}
+fn minus_z() -> V3 {
+    [0.0, 0.0, -1.0]
+}
+fn environment_samples() -> u32 {
+    light::environment::DEFAULT_SAMPLES
 }
 
 fn linear_points() -> u32 {
@@ -484,7 +506,7 @@ fn build(src: &Source, spec: SceneSpec) -> Result<RenderScene, SceneError> {
 
     let mut lights = Vec::new();
     for (k, l) in spec.lights.iter().enumerate() {
-        let light = make_light(l.get_ref(), k as u64)
+        let light = make_light(src, l.get_ref(), k as u64)
             .map_err(|e| src.at(l.span(), &format!("lights[{k}]"), e))?;
         lights.push(light);
     }
@@ -610,9 +632,22 @@ fn material(src: &Source, name: &str, m: &Spanned<MaterialSpec>) -> Result<Mater
     })
 }
 
-fn make_light(l: &LightSpec, seed: u64) -> Result<Light, light::LightError> {
+fn make_light(src: &Source, l: &LightSpec, seed: u64) -> Result<Light, light::LightError> {
     let v = Vec3::from;
     Ok(match *l {
+        LightSpec::Environment {
+            ref file,
+            scale,
+            up,
+            forward,
+            samples,
+        } => Light::Environment(light::Environment::load(
+            &src.resolve(file),
+            scale,
+            v(up),
+            v(forward),
+            samples,
+        )?),
         LightSpec::Omni {
             position,
             intensity,

@@ -122,6 +122,15 @@ fn missing_files_are_named() {
     );
     let (msg, _) = error(&bdf);
     assert!(msg.contains("paint.bdf"), "{msg}");
+    let env = GOOD.replace(
+        "type = \"omni\"\nposition = [0, 3, 0]\nintensity = [10, 10, 10]",
+        "type = \"environment\"\nfile = \"sky.exr\"",
+    );
+    let (msg, _) = error(&env);
+    assert!(
+        msg.contains("sky.exr") && msg.contains("lights[0]"),
+        "{msg}"
+    );
 }
 
 #[test]
