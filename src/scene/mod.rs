@@ -8,6 +8,7 @@ pub mod error;
 pub mod file;
 #[cfg(test)]
 mod file_tests;
+pub mod gltf;
 pub mod motion;
 pub mod shaded;
 
@@ -185,7 +186,7 @@ impl RenderScene {
     }
 }
 
-/// Mesh file extensions [`load`] takes as a bare mesh.
+/// Mesh file extensions [`load`] takes as a bare mesh (besides `.gltf` and `.glb`).
 pub const MESH_EXTENSIONS: [&str; 3] = ["obj", "ply", "off"];
 
 /// A scene file (.toml, see [`file`]), a built-in scene's name, or a bare mesh file (framed by a default
@@ -199,6 +200,7 @@ pub fn load(spec: &str) -> Result<RenderScene, SceneError> {
     let scene = match ext.as_deref() {
         Some(e) if MESH_EXTENSIONS.contains(&e) => builtin::bare_mesh(path)?,
         Some("toml") => file::load_file(path)?,
+        Some("gltf" | "glb") => gltf::load_gltf(path)?,
         _ => match builtin::by_name(spec) {
             Some(s) => s,
             None => {
