@@ -24,6 +24,7 @@ pub use timing::{Timing, speedup};
 pub mod accel;
 pub mod kernels;
 pub mod table1;
+pub mod table2;
 pub mod table4;
 
 /// Every experiment, in the order `reproduce` runs them and the README lists them. The
@@ -32,13 +33,7 @@ pub const EXPERIMENTS: &[Experiment] = &[
     kernels::EXPERIMENT,
     accel::EXPERIMENT,
     table1::EXPERIMENT,
-    Experiment::planned(
-        "table2",
-        "light source evaluation per light type and backend",
-        "Table 2 (section 5)",
-        &["table2_lights.csv"],
-        None,
-    ),
+    table2::EXPERIMENT,
     Experiment::planned(
         "table3",
         "rendering the test scenes per backend and accel",

@@ -8,7 +8,7 @@ use coherent::scene::builtin::{PAPER_TABLE4, by_name};
 
 use crate::ctx::Ctx;
 use crate::experiment::{Experiment, Status};
-use crate::table::{PaperTable, fmt_num, markdown_table};
+use crate::table::{PaperTable, markdown_table};
 
 pub const EXPERIMENT: Experiment = Experiment {
     name: "table4",
@@ -87,7 +87,7 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
             .unwrap_or_else(|| "—".to_owned());
         let mut cells = vec![scene];
         for c in ["triangles", "objects", "lights", "depth", "materials"] {
-            cells.push(num(c).map_or_else(|| "—".to_owned(), fmt_num));
+            cells.push(table.get(r, c)?.to_owned());
         }
         cells.push(off);
         cells.push(table.get(r, "light_kinds")?.replace('+', ", "));

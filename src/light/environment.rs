@@ -54,6 +54,8 @@ pub struct Environment {
     axes: [Vec3; 3],
     scale: f32,
     samples: u32,
+    /// Negative channels set to zero when loaded.
+    clamped: usize,
 }
 
 /// The search step sizes for `n` cells.
@@ -195,6 +197,7 @@ impl Environment {
             axes: [ex, ey, ez],
             scale,
             samples,
+            clamped: 0,
         })
     }
 
@@ -209,6 +212,9 @@ impl Environment {
     }
 
     /// Loads an OpenEXR latitude-longitude map (its first RGB layer; alpha ignored).
+    /// Negative channels, which lossy EXR compression (DWAA/DWAB, B44) leaves around dark
+    /// texels (Blender's studio-light maps hold a few of -1e-4 or so), are set to zero and
+    /// counted ([`Environment::clamped`]); NaN or infinite texels are errors.
     pub fn load(
         path: &Path,
         scale: f32,
@@ -216,8 +222,17 @@ impl Environment {
         forward: Vec3,
         samples: u32,
     ) -> Result<Self, LightError> {
-        let (width, height, texels) = read_exr(path)?;
-        Environment::new(
+        let (width, height, mut texels) = read_exr(path)?;
+        let mut clamped = 0;
+        for t in &mut texels {
+            for c in t.iter_mut() {
+                if *c < 0.0 {
+                    *c = 0.0;
+                    clamped += 1;
+                }
+            }
+        }
+        let mut env = Environment::new(
             &path.display().to_string(),
             width,
             height,
@@ -226,7 +241,14 @@ impl Environment {
             up,
             forward,
             samples,
-        )
+        )?;
+        env.clamped = clamped;
+        Ok(env)
+    }
+
+    /// How many negative channels [`Environment::load`] set to zero.
+    pub fn clamped(&self) -> usize {
+        self.clamped
     }
 
     pub fn samples(&self) -> u32 {

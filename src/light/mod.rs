@@ -19,6 +19,8 @@ pub mod circular;
 pub mod direct;
 pub mod environment;
 pub mod goniodiagram;
+pub mod ies;
+pub mod ldt;
 pub mod linear;
 pub mod omni;
 pub mod parallel;

@@ -21,7 +21,8 @@
 //! diffuse = [0.7, 0.1, 0.1]
 //!
 //! [[objects]]
-//! mesh = "bunny.obj"              # or: shape = "box" | "sphere" | "quad"
+//! mesh = "bunny.obj"              # .obj/.ply/.off, or a .gltf/.glb placed whole (its nodes,
+//!                                 # materials and lights); or: shape = "box" | "sphere" | "quad"
 //! material = "red"                # default: the file's own materials
 //! translate = [0, 0, 0]
 //! rotate_deg = [0, 90, 0]         # about x, then y, then z
@@ -30,7 +31,8 @@
 //!
 //! [[lights]]
 //! type = "omni"                   # omni | spot | parallel | direct | linear | circular |
-//!                                 # rectangular | environment (file = "sky.exr")
+//!                                 # rectangular | goniodiagram (file = "lamp.ies" or ".ldt")
+//!                                 # | environment (file = "sky.exr")
 //! position = [0, 3, 0]
 //! intensity = [10, 10, 10]
 //! ```
@@ -225,6 +227,18 @@ enum LightSpec {
         #[serde(default = "rectangular_grid")]
         grid: [u32; 2],
     },
+    Goniodiagram {
+        file: String,
+        position: V3,
+        #[serde(default = "y_up")]
+        up: V3,
+        #[serde(default = "x_axis")]
+        x: V3,
+        #[serde(default = "ones")]
+        colour: V3,
+        #[serde(default)]
+        uniform: bool,
+    },
     Environment {
         file: String,
         #[serde(default = "unit")]
@@ -238,6 +252,9 @@ enum LightSpec {
     },
 }
 
+fn x_axis() -> V3 {
+    [1.0, 0.0, 0.0]
+}
 fn unit() -> f32 {
     1.0
 }
@@ -384,6 +401,7 @@ fn build(src: &Source, spec: SceneSpec) -> Result<RenderScene, SceneError> {
     let mut mesh_ids: HashMap<(String, Option<u32>), usize> = HashMap::new();
     let mut instances = Vec::new();
     let mut motion = Vec::new();
+    let mut gltf_lights = Vec::new();
     for (k, o) in spec.objects.iter().enumerate() {
         let field = format!("objects[{k}]");
         let span = o.span();
@@ -407,6 +425,50 @@ fn build(src: &Source, spec: SceneSpec) -> Result<RenderScene, SceneError> {
                 )
             })?),
         };
+        let rotation = |r: V3| {
+            let r = Vec3::from(r) * (std::f32::consts::PI / 180.0);
+            Quat::from_euler(EulerRot::ZYX, r.z, r.y, r.x)
+        };
+        let base = Keyframe {
+            time: 0.0,
+            translation: Vec3::from(o.translate),
+            rotation: rotation(o.rotate_deg),
+            scale: Vec3::from(o.scale),
+        };
+        let world = base.transform();
+        if let Some(m) = &o.mesh
+            && is_gltf(m.get_ref())
+        {
+            if !o.keyframes.is_empty() {
+                return Err(src.at(
+                    span,
+                    &format!("{field}.keyframes"),
+                    "keyframes move one instance; a glTF object places many (animate its nodes \
+                     by placing them as separate objects)",
+                ));
+            }
+            let l = super::gltf::read_file(&src.resolve(m.get_ref()))
+                .map_err(|e| src.at(m.span(), &format!("{field}.mesh"), e))?;
+            let (mesh_base, mat_base) = (meshes.len(), materials.len() as u32);
+            for mut sm in l.meshes {
+                match mat {
+                    Some(id) => sm.material.iter_mut().for_each(|x| *x = id),
+                    None => sm.material.iter_mut().for_each(|x| *x += mat_base),
+                }
+                meshes.push(sm);
+            }
+            if mat.is_none() {
+                materials.extend(l.materials);
+            }
+            for i in l.instances {
+                let inst = Instance::new(mesh_base + i.mesh, world * i.world_from_object);
+                inst.object_from_world(instances.len(), meshes.len())
+                    .map_err(|e| src.at(span.clone(), &field, e))?;
+                instances.push(inst);
+            }
+            gltf_lights.extend(l.lights);
+            continue;
+        }
         let key = match (&o.mesh, &o.shape) {
             (Some(m), None) => format!("mesh:{}", m.get_ref()),
             (None, Some(s)) => format!("shape:{s:?}"),
@@ -450,17 +512,6 @@ fn build(src: &Source, spec: SceneSpec) -> Result<RenderScene, SceneError> {
                 meshes.len() - 1
             }
         };
-        let rotation = |r: V3| {
-            let r = Vec3::from(r) * (std::f32::consts::PI / 180.0);
-            Quat::from_euler(EulerRot::ZYX, r.z, r.y, r.x)
-        };
-        let base = Keyframe {
-            time: 0.0,
-            translation: Vec3::from(o.translate),
-            rotation: rotation(o.rotate_deg),
-            scale: Vec3::from(o.scale),
-        };
-        let world = base.transform();
         let inst = Instance::new(mesh_id, world);
         inst.object_from_world(instances.len(), meshes.len())
             .map_err(|_| {
@@ -504,7 +555,7 @@ fn build(src: &Source, spec: SceneSpec) -> Result<RenderScene, SceneError> {
         });
     }
 
-    let mut lights = Vec::new();
+    let mut lights = gltf_lights;
     for (k, l) in spec.lights.iter().enumerate() {
         let light = make_light(src, l.get_ref(), k as u64)
             .map_err(|e| src.at(l.span(), &format!("lights[{k}]"), e))?;
@@ -537,6 +588,15 @@ fn build(src: &Source, spec: SceneSpec) -> Result<RenderScene, SceneError> {
         e => e,
     })?;
     Ok(scene)
+}
+
+/// Whether `file` names a glTF file (placed as a whole: its nodes, materials and lights).
+fn is_gltf(file: &str) -> bool {
+    let ext = Path::new(file)
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    matches!(ext.as_deref(), Some("gltf" | "glb"))
 }
 
 /// A unit shape: a box `[-0.5, 0.5]^3`, a sphere of radius 1 (1,280 triangles, smooth
@@ -635,6 +695,25 @@ fn material(src: &Source, name: &str, m: &Spanned<MaterialSpec>) -> Result<Mater
 fn make_light(src: &Source, l: &LightSpec, seed: u64) -> Result<Light, light::LightError> {
     let v = Vec3::from;
     Ok(match *l {
+        LightSpec::Goniodiagram {
+            ref file,
+            position,
+            up,
+            x,
+            colour,
+            uniform,
+        } => Light::Goniodiagram(light::Goniodiagram::load(
+            &src.resolve(file),
+            v(position),
+            v(up),
+            v(x),
+            colour,
+            if uniform {
+                light::GonioLookup::Uniform
+            } else {
+                light::GonioLookup::Search
+            },
+        )?),
         LightSpec::Environment {
             ref file,
             scale,

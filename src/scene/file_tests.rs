@@ -203,3 +203,47 @@ fn mesh_files_resolve_relative_to_the_scene_and_load_through_load() {
     assert_eq!(s.meshes[0].mesh.indices.len(), 1);
     assert_eq!(s.name, "s");
 }
+
+#[test]
+fn gltf_objects_are_placed_whole() {
+    let d = tempfile::tempdir().unwrap();
+    std::fs::write(d.path().join("q.gltf"), super::gltf::tests::quad_gltf()).unwrap();
+    let scene = GOOD.replace(
+        "shape = \"quad\"\nmaterial = \"red\"\nscale = [10, 1, 10]",
+        "mesh = \"q.gltf\"\ntranslate = [0, 5, 0]",
+    );
+    let p = d.path().join("g.toml");
+    std::fs::write(&p, &scene).unwrap();
+    let s = super::load(p.to_str().unwrap()).unwrap();
+    // The node's z = -2 and the object's y = 5 compose.
+    let t = s.instances[0].world_from_object.translation;
+    assert_eq!((t.y, t.z), (5.0, -2.0));
+    assert_eq!(
+        s.lights.len(),
+        3,
+        "the glTF's point light joins the file's two"
+    );
+    assert!(s.materials[s.meshes[0].material[0] as usize].optics.fresnel);
+    let bad = scene.replace("translate = [0, 5, 0]", "keyframes = [{ time = 1.0 }]");
+    std::fs::write(&p, bad).unwrap();
+    let e = super::load(p.to_str().unwrap()).unwrap_err().to_string();
+    assert!(e.contains("keyframes") && e.contains("g.toml:"), "{e}");
+}
+
+#[test]
+fn a_goniodiagram_from_an_ies_file() {
+    let d = tempfile::tempdir().unwrap();
+    std::fs::write(
+        d.path().join("lamp.ies"),
+        "IESNA:LM-63-2002\nTILT=NONE\n1 1000 1 3 1 1 2 0 0 0\n1 1 100\n0 45 90\n0\n1000 800 100\n",
+    )
+    .unwrap();
+    let scene = GOOD.replace(
+        "type = \"omni\"\nposition = [0, 3, 0]\nintensity = [10, 10, 10]",
+        "type = \"goniodiagram\"\nfile = \"lamp.ies\"\nposition = [0, 3, 0]",
+    );
+    let p = d.path().join("l.toml");
+    std::fs::write(&p, scene).unwrap();
+    let s = super::load(p.to_str().unwrap()).unwrap();
+    assert_eq!(s.lights[0].kind(), crate::light::LightKind::Goniodiagram);
+}

@@ -22,13 +22,23 @@ use crate::texture::{InverseToneMap, Wrap};
 use crate::tonemap::Operator;
 
 /// What a glTF file holds, before defaults (the camera and light of a bare mesh) are added.
-struct Loaded {
-    meshes: Vec<ShadedMesh>,
-    instances: Vec<Instance>,
-    materials: Vec<Material>,
-    lights: Vec<Light>,
-    camera: Option<Camera>,
-    skipped_primitives: usize,
+/// Material ids index `materials`; instances index `meshes`.
+pub struct Loaded {
+    pub meshes: Vec<ShadedMesh>,
+    pub instances: Vec<Instance>,
+    pub materials: Vec<Material>,
+    pub lights: Vec<Light>,
+    pub camera: Option<Camera>,
+    pub skipped_primitives: usize,
+}
+
+/// Reads the meshes, instances, materials, lights and camera of a `.gltf` or `.glb` file.
+pub fn read_file(path: &Path) -> Result<Loaded, SceneError> {
+    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    read(path, &bytes)
 }
 
 fn err(path: &Path, problem: impl Into<String>) -> SceneError {
@@ -38,11 +48,7 @@ fn err(path: &Path, problem: impl Into<String>) -> SceneError {
 /// Reads a `.gltf` or `.glb` file as a scene: its camera (or one framing it), its lights (or
 /// the default light), depth 2, the default resolution.
 pub fn load_gltf(path: &Path) -> Result<RenderScene, SceneError> {
-    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let l = read(path, &bytes)?;
+    let l = read_file(path)?;
     let name = path
         .file_stem()
         .map_or_else(|| "gltf".to_string(), |s| s.to_string_lossy().into_owned());
@@ -392,12 +398,12 @@ fn material(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// A glTF with one quad (two triangles, data-URI buffer), a glass material, a camera and a
     /// point light, placed by a translated node.
-    fn quad_gltf() -> String {
+    pub(crate) fn quad_gltf() -> String {
         let mut buf = Vec::new();
         for p in [
             [0.0f32, 0.0, 0.0],
