@@ -122,7 +122,11 @@ mod tests {
         run(&mut ctx).unwrap();
         let md = report(&ctx).unwrap().unwrap();
         assert!(
-            md.contains("| spdemo | 988 | 988 | 3 | 3 | 2 | 2 |"),
+            md.contains("| spdemo | 988 | 988 | 3.00 | 3.00 | 2.00 | 2.00 |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| spdemo | 988 | 7 | 3 | 2 | 4 | +0.0 % | omni, direct, linear |"),
             "{md}"
         );
         assert!(md.contains("goniodiagram"), "{md}");
