@@ -253,6 +253,47 @@ mod tests {
         }));
     }
 
+    /// The camera sees the scene: a 32 x 24 grid of primary rays through the BSP hits
+    /// geometry in most pixels (all of them inside a closed room; car shows the sky above
+    /// the horizon) and several materials.
+    #[test]
+    fn cameras_frame_the_scenes() {
+        use coherent_accel::Accel;
+        use coherent_accel::scenes::View;
+        for (name, min_hit) in [
+            ("car", 0.5),
+            ("spdemo", 0.9),
+            ("glass1", 0.9),
+            ("room2", 1.0),
+            ("cornell", 0.6),
+        ] {
+            let s = by_name(name).unwrap();
+            let accel = coherent_bsp::Bsp::build(&s.accel_scene(), &Default::default()).unwrap();
+            let c = s.camera;
+            let view = View {
+                eye: c.position,
+                target: c.look_at,
+                up: c.up,
+                fov_y_degrees: c.vfov_deg,
+            };
+            let (mut hits, mut materials) = (0, std::collections::BTreeSet::new());
+            for y in 0..24 {
+                for x in 0..32 {
+                    let r =
+                        view.ray_at((x as f32 + 0.5) / 32.0, (y as f32 + 0.5) / 24.0, 4.0 / 3.0);
+                    if let Some(h) = accel.intersect1(&r) {
+                        hits += 1;
+                        let mesh = s.instances[h.inst as usize].mesh;
+                        materials.insert(s.meshes[mesh].material[h.prim as usize]);
+                    }
+                }
+            }
+            let frac = hits as f64 / (32.0 * 24.0);
+            assert!(frac >= min_hit, "{name}: {frac} of the primary rays hit");
+            assert!(materials.len() >= 3, "{name}: sees materials {materials:?}");
+        }
+    }
+
     #[test]
     fn builtins_are_deterministic() {
         let (a, b) = (spdemo(), spdemo());
