@@ -196,7 +196,7 @@ fn read(path: &Path, bytes: &[u8]) -> Result<Loaded, SceneError> {
                 Some(i) => i.into_u32().collect(),
                 None => (0..count as u32).collect(),
             };
-            if idx.len() % 3 != 0 {
+            if !idx.len().is_multiple_of(3) {
                 return Err(err(
                     path,
                     format!("mesh '{name}': {} indices, not a multiple of 3", idx.len()),

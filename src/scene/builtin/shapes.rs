@@ -136,7 +136,7 @@ fn texture(name: &str, size: usize, f: impl Fn(f32, f32) -> [f32; 3]) -> Arc<Tex
 pub fn checker(name: &str, size: usize, n: u32, a: [f32; 3], b: [f32; 3]) -> Arc<Texture> {
     texture(name, size, |u, v| {
         let k = (u * n as f32) as u32 + (v * n as f32) as u32;
-        if k % 2 == 0 { a } else { b }
+        if k.is_multiple_of(2) { a } else { b }
     })
 }
 
