@@ -19,6 +19,7 @@ pub mod machine;
 pub mod material;
 pub mod mesh_file;
 pub mod sampler;
+pub mod scene;
 pub mod tabulated;
 pub mod texture;
 pub mod tonemap;

@@ -26,6 +26,7 @@ pub mod accel;
 pub mod kernels;
 pub mod table1;
 pub mod table2;
+pub mod table4;
 
 /// Every experiment, in the order `reproduce` runs them and the README lists them. The
 /// names are the results contract (`--only` takes them).
@@ -41,13 +42,7 @@ pub const EXPERIMENTS: &[Experiment] = &[
         &["table3_scenes.csv"],
         None,
     ),
-    Experiment::planned(
-        "table4",
-        "the characteristics of the test scenes",
-        "Table 4 (section 7)",
-        &["table4_scenes.csv"],
-        None,
-    ),
+    table4::EXPERIMENT,
     Experiment::planned(
         "table5",
         "rendering with 1, 2, ... threads",
