@@ -10,6 +10,7 @@ pub use coherent_embree as embree;
 #[cfg(feature = "obvhs")]
 pub use coherent_obvhs as obvhs;
 
+pub mod accel_any;
 pub mod approx;
 pub mod bdf;
 pub mod kernels;
