@@ -17,5 +17,6 @@ pub mod kernels;
 pub mod machine;
 pub mod material;
 pub mod mesh_file;
+pub mod scene;
 pub mod tabulated;
 pub mod texture;
