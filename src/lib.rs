@@ -12,8 +12,10 @@ pub use coherent_obvhs as obvhs;
 
 pub mod accel_any;
 pub mod approx;
+pub mod camera;
 pub mod bdf;
 pub mod kernels;
+pub mod render;
 pub mod machine;
 pub mod material;
 pub mod mesh_file;
