@@ -176,7 +176,7 @@ impl RenderScene {
 }
 
 /// Mesh file extensions [`load`] takes as a bare mesh.
-pub const MESH_EXTENSIONS: [&str; 2] = ["obj", "off"];
+pub const MESH_EXTENSIONS: [&str; 3] = ["obj", "ply", "off"];
 
 /// A scene file (.toml), a built-in scene's name, or a bare mesh file (framed by a default
 /// camera and light).

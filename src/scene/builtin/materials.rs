@@ -3,11 +3,6 @@
 
 use crate::material::Material;
 
-/// A matte grey: the default material of a bare mesh.
-pub fn grey() -> Material {
-    Material::phong("grey", [0.6; 3], [0.2; 3], 20.0)
-}
-
 /// A diffuse Phong colour with a weak highlight.
 pub fn matte(name: &str, diffuse: [f32; 3]) -> Material {
     Material::phong(name, diffuse, [0.05; 3], 10.0)

@@ -7,7 +7,7 @@ mod materials;
 
 use std::path::Path;
 
-use super::{Camera, RenderScene, SceneError, ShadedMesh};
+use super::{Camera, RenderScene, SceneError};
 use coherent_accel::Instance;
 
 pub use cornell::cornell;
@@ -26,19 +26,18 @@ pub fn by_name(name: &str) -> Option<RenderScene> {
     }
 }
 
-/// A bare mesh file as a scene: one grey Phong material, smooth normals, framed by
-/// [`Camera::framing`], depth 1.
+/// A bare mesh file as a scene: its own materials (a grey Phong default when it names none),
+/// framed by [`Camera::framing`], depth 1.
 pub fn bare_mesh(path: &Path) -> Result<RenderScene, SceneError> {
-    let mesh = crate::mesh_file::load(path)?;
-    let b = mesh.bounds();
-    let name = mesh.name.clone();
-    let shaded = ShadedMesh::flat(mesh, 0).with_smooth_normals();
+    let file = crate::mesh_file::load_shaded(path)?;
+    let b = file.mesh.mesh.bounds();
+    let name = file.mesh.mesh.name.clone();
     let (width, height) = super::DEFAULT_RESOLUTION;
     Ok(RenderScene {
         name,
-        meshes: vec![shaded],
+        meshes: vec![file.mesh],
         instances: vec![Instance::identity(0)],
-        materials: vec![materials::grey()],
+        materials: file.materials,
         camera: Camera::framing(b.min, b.max),
         width,
         height,

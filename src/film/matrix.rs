@@ -1,0 +1,112 @@
+//! The two screen matrices of the progressive film (paper section 6.2): each holds a colour
+//! sum and a sample count per pixel; a pixel's samples go alternately to one and the other,
+//! and the difference of their estimates measures the accuracy.
+
+use super::accuracy::relative_difference;
+use super::superpixel::Superpixels;
+
+/// Colour sums and sample counts per pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScreenMatrix {
+    pub sum: Vec<[f64; 3]>,
+    pub count: Vec<u32>,
+}
+
+impl ScreenMatrix {
+    fn new(pixels: usize) -> ScreenMatrix {
+        ScreenMatrix {
+            sum: vec![[0.0; 3]; pixels],
+            count: vec![0; pixels],
+        }
+    }
+    /// Mean colour of pixel `p` (zero without samples).
+    pub fn mean(&self, p: usize) -> [f32; 3] {
+        let n = self.count[p];
+        if n == 0 {
+            return [0.0; 3];
+        }
+        let s = self.sum[p];
+        let k = 1.0 / n as f64;
+        [(s[0] * k) as f32, (s[1] * k) as f32, (s[2] * k) as f32]
+    }
+}
+
+/// The film: two screen matrices (always the image's resolution), the superpixel corners
+/// and which pixels are interpolated from them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Film {
+    pub width: u32,
+    pub height: u32,
+    pub matrices: [ScreenMatrix; 2],
+    pub superpixels: Superpixels,
+    /// Pixels whose value is interpolated from their superpixel's corners (until they have
+    /// samples in both matrices).
+    pub interpolated: Vec<bool>,
+    /// Noise floor of the accuracy measure (see [`relative_difference`]).
+    pub floor: f32,
+}
+
+impl Film {
+    pub(crate) fn new(width: u32, height: u32, superpixels: Superpixels, floor: f32) -> Film {
+        let n = width as usize * height as usize;
+        Film {
+            width,
+            height,
+            matrices: [ScreenMatrix::new(n), ScreenMatrix::new(n)],
+            superpixels,
+            interpolated: vec![false; n],
+            floor,
+        }
+    }
+
+    pub fn pixels(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+
+    /// Samples in pixel `p`, both matrices.
+    pub fn samples(&self, p: usize) -> u32 {
+        self.matrices[0].count[p] + self.matrices[1].count[p]
+    }
+
+    /// Adds sample number `k` of pixel `p` (to matrix `k % 2`).
+    #[inline]
+    pub(crate) fn add(&mut self, p: usize, k: u64, c: [f32; 3]) {
+        let m = &mut self.matrices[(k % 2) as usize];
+        m.count[p] += 1;
+        for (s, v) in m.sum[p].iter_mut().zip(c) {
+            *s += v as f64;
+        }
+    }
+
+    /// The relative difference of the two matrices' estimates at `p`, or `None` unless both
+    /// have samples there.
+    pub fn error(&self, p: usize) -> Option<f32> {
+        let [a, b] = &self.matrices;
+        (a.count[p] > 0 && b.count[p] > 0)
+            .then(|| relative_difference(a.mean(p), b.mean(p), self.floor))
+    }
+
+    /// The estimate of pixel `p`: the mean of all its samples; the superpixel interpolation
+    /// where the pixel is interpolated and not yet sampled in both matrices, or has no sample.
+    pub fn pixel(&self, p: usize) -> [f32; 3] {
+        let n = self.samples(p);
+        let both = self.matrices[0].count[p] > 0 && self.matrices[1].count[p] > 0;
+        if n == 0 || (self.interpolated[p] && !both) {
+            let (x, y) = (p as u32 % self.width, p as u32 / self.width);
+            return self.superpixels.interpolate(x, y);
+        }
+        let mut c = [0.0f64; 3];
+        for m in &self.matrices {
+            for (ci, s) in c.iter_mut().zip(m.sum[p]) {
+                *ci += s;
+            }
+        }
+        let k = 1.0 / n as f64;
+        [(c[0] * k) as f32, (c[1] * k) as f32, (c[2] * k) as f32]
+    }
+
+    /// The whole image, row by row.
+    pub fn estimate(&self) -> Vec<[f32; 3]> {
+        (0..self.pixels()).map(|p| self.pixel(p)).collect()
+    }
+}

@@ -1,0 +1,231 @@
+//! The progressive film (paper section 6.2): samples from the Halton sampler traced in
+//! coherent groups through a [`SampleTracer`], accumulated in two screen matrices whose
+//! disagreement is the accuracy measure, superpixels interpolated where their corners agree,
+//! and the tone-mapped (section 6.1) and HDR image output.
+
+mod accuracy;
+mod matrix;
+mod output;
+mod render;
+mod superpixel;
+mod tracer;
+
+#[cfg(test)]
+mod tests;
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+pub use accuracy::relative_difference;
+pub use matrix::{Film, ScreenMatrix};
+pub use render::render;
+pub use superpixel::Superpixels;
+pub use tracer::SampleTracer;
+
+use crate::sampler::{HaltonTile, Span};
+use crate::tonemap::{self, Adaptation, Display, ToneMap};
+use coherent_simd::BackendError;
+
+/// How samples are placed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Method {
+    /// The paper's progressive adaptive anti-aliasing: superpixels interpolated where their
+    /// corners agree, then levels of growing span; a pixel is done when its two screen
+    /// matrices agree within `accuracy` (relative) over its 3x3 neighbourhood, or it has
+    /// `max_samples_per_pixel` samples. Stops when every pixel is done or the time runs out.
+    Adaptive {
+        accuracy: f32,
+        max_samples_per_pixel: u32,
+        time_budget: Option<Duration>,
+    },
+    /// Classical supersampling: `spp` Halton samples in every pixel, one pass per sample.
+    Uniform { spp: u32 },
+}
+
+impl Method {
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::Adaptive { .. } => "adaptive",
+            Method::Uniform { .. } => "uniform",
+        }
+    }
+}
+
+/// Largest accepted width or height.
+pub const MAX_SIDE: u32 = 16_384;
+/// Largest accepted pixel count.
+pub const MAX_PIXELS: u64 = 64 << 20;
+
+/// What to render and how.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FilmOptions {
+    pub width: u32,
+    pub height: u32,
+    pub method: Method,
+    pub tonemap: tonemap::Operator,
+    pub display: Display,
+    /// The Halton tile (`2^a x 3^b` pixels; default 16 x 9).
+    pub tile: HaltonTile,
+    /// Superpixel size in pixels (the pre-render grid and, for the adaptive method, the
+    /// interpolation cells; the paper used sizes up to 16 x 24). Default 8 x 6.
+    pub superpixel: (u32, u32),
+}
+
+impl FilmOptions {
+    pub fn new(width: u32, height: u32, method: Method) -> FilmOptions {
+        FilmOptions {
+            width,
+            height,
+            method,
+            tonemap: tonemap::Operator::default(),
+            display: Display::default(),
+            tile: HaltonTile::new(4, 2),
+            superpixel: (8, 6),
+        }
+    }
+
+    /// Checks the options: a clear error for a zero or huge resolution, a non-positive
+    /// accuracy, zero samples or more samples than the sample ids can tell apart.
+    pub fn validate(&self) -> Result<(), FilmError> {
+        let (w, h) = (self.width, self.height);
+        if w == 0 || h == 0 {
+            return Err(FilmError::Resolution {
+                width: w,
+                height: h,
+                why: "width and height must be at least 1".into(),
+            });
+        }
+        if w > MAX_SIDE || h > MAX_SIDE || w as u64 * h as u64 > MAX_PIXELS {
+            return Err(FilmError::Resolution {
+                width: w,
+                height: h,
+                why: format!(
+                    "at most {MAX_SIDE} pixels a side and {} Mpixels",
+                    MAX_PIXELS >> 20
+                ),
+            });
+        }
+        let (sx, sy) = self.superpixel;
+        if sx == 0 || sy == 0 || sx > 64 || sy > 64 {
+            return Err(FilmError::Options(format!(
+                "superpixel size {sx}x{sy}: each side must be in 1..=64"
+            )));
+        }
+        let spp = match self.method {
+            Method::Uniform { spp } => spp,
+            Method::Adaptive {
+                accuracy,
+                max_samples_per_pixel,
+                ..
+            } => {
+                if !(accuracy.is_finite() && accuracy > 0.0) {
+                    return Err(FilmError::Options(format!(
+                        "accuracy {accuracy}: must be a positive number (e.g. 0.02 for 2%)"
+                    )));
+                }
+                max_samples_per_pixel
+            }
+        };
+        if spp == 0 {
+            return Err(FilmError::Options(
+                "samples per pixel must be at least 1".into(),
+            ));
+        }
+        let corners = (w.div_ceil(sx) as u64 + 1) * (h.div_ceil(sy) as u64 + 1);
+        // Adaptive passes may overshoot the cap by one packet of samples per pixel.
+        let ids = corners + (spp as u64 + 16) * w as u64 * h as u64;
+        if ids > u32::MAX as u64 {
+            return Err(FilmError::Options(format!(
+                "{spp} samples per pixel at {w}x{h}: more samples than 2^32 sample ids"
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Why rendering stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StopReason {
+    /// Uniform: every pass done.
+    Done,
+    /// Adaptive: every pixel met the accuracy (or was interpolated).
+    Accuracy,
+    /// Adaptive: every pixel not meeting the accuracy reached the sample cap.
+    SampleBudget,
+    /// Adaptive: the time budget ran out.
+    TimeBudget,
+}
+
+/// One pass, as recorded.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PassRecord {
+    /// 0 is the pre-render (superpixel corners).
+    pub pass: u32,
+    pub span: Span,
+    /// Coherence radius of the span, in pixels.
+    pub radius: f64,
+    /// Rays traced so far (primary samples, pre-render included).
+    pub rays: u64,
+    pub rays_this_pass: u64,
+    pub groups_traced: u64,
+    pub groups_skipped: u64,
+    /// Seconds since the render started.
+    pub seconds: f64,
+    /// Mean relative difference of the two screen matrices over pixels sampled in both.
+    pub error: f64,
+    /// Fraction of pixels done (met the accuracy, interpolated or at the sample cap).
+    pub done: f64,
+    /// How close the samples of this pass's traced groups really are.
+    pub coherence: Coherence,
+}
+
+/// What the progress callback sees after each pass: the record and the film so far.
+pub struct PassReport<'a> {
+    pub record: PassRecord,
+    pub film: &'a Film,
+}
+
+/// Samples whose radiance was fixed up (set to 0): NaN or infinite, or negative.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Fixups {
+    pub non_finite: u64,
+    pub negative: u64,
+}
+
+/// A finished render.
+pub struct Rendered<S> {
+    pub film: Film,
+    pub adaptation: Adaptation,
+    pub tonemap: ToneMap,
+    pub rays: u64,
+    pub passes: Vec<PassRecord>,
+    pub stats: S,
+    pub fixups: Fixups,
+    pub stop: StopReason,
+}
+
+/// How close the samples of traced groups really are: distances (pixels) of a group's
+/// samples to the group's centroid, over the groups of a pass with two or more samples.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Coherence {
+    pub mean_distance: f64,
+    pub max_distance: f64,
+    pub groups: u64,
+}
+
+/// A film error: names the problem (and the path for output).
+#[derive(Debug, thiserror::Error)]
+pub enum FilmError {
+    #[error("resolution {width}x{height}: {why}")]
+    Resolution {
+        width: u32,
+        height: u32,
+        why: String,
+    },
+    #[error("film options: {0}")]
+    Options(String),
+    #[error(transparent)]
+    Backend(#[from] BackendError),
+    #[error("cannot write {}: {reason}", path.display())]
+    Write { path: PathBuf, reason: String },
+}

@@ -1,0 +1,105 @@
+//! Image output of the film: HDR radiance to OpenEXR, the tone-mapped image (section 6.1)
+//! to PNG, and either screen matrix (mean colour, sample count as alpha) for inspection.
+
+use std::path::Path;
+
+use coherent_simd::Backend;
+
+use super::{FilmError, Rendered};
+use crate::tonemap;
+
+fn write_error(path: &Path, reason: impl ToString) -> FilmError {
+    FilmError::Write {
+        path: path.to_path_buf(),
+        reason: reason.to_string(),
+    }
+}
+
+impl<S> Rendered<S> {
+    /// The HDR radiance estimate, row by row.
+    pub fn image(&self) -> Vec<[f32; 3]> {
+        self.film.estimate()
+    }
+
+    /// The tone-mapped image (display values in `[0, 1]`), computed in packets with
+    /// `backend`.
+    pub fn tone_mapped(&self, backend: Backend) -> Result<Vec<[f32; 3]>, FilmError> {
+        Ok(tonemap::apply_image(backend, &self.tonemap, &self.image())?)
+    }
+
+    /// Writes the HDR radiance to an OpenEXR file.
+    pub fn write_exr(&self, path: &Path) -> Result<(), FilmError> {
+        write_exr_rgb(path, self.film.width, self.film.height, &self.image())
+    }
+
+    /// Writes the tone-mapped image, sRGB encoded, to a PNG file (tone mapping runs on the
+    /// widest backend usable here).
+    pub fn write_png(&self, path: &Path) -> Result<(), FilmError> {
+        let backend = *Backend::available()
+            .last()
+            .expect("scalar is always usable");
+        write_png_rgb(
+            path,
+            self.film.width,
+            self.film.height,
+            &self.tone_mapped(backend)?,
+        )
+    }
+
+    /// Writes screen matrix `which` (0 or 1): RGB = its mean colour, A = its sample count.
+    pub fn write_matrix_exr(&self, which: usize, path: &Path) -> Result<(), FilmError> {
+        let m = self
+            .film
+            .matrices
+            .get(which)
+            .ok_or_else(|| FilmError::Options(format!("screen matrix {which}: there are 2")))?;
+        let w = self.film.width as usize;
+        exr::prelude::write_rgba_file(path, w, self.film.height as usize, |x, y| {
+            let p = y * w + x;
+            let c = m.mean(p);
+            (c[0], c[1], c[2], m.count[p] as f32)
+        })
+        .map_err(|e| write_error(path, e))
+    }
+
+    /// Writes the image to `path`, as EXR or PNG by its extension.
+    pub fn write(&self, path: &Path) -> Result<(), FilmError> {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase())
+            .as_deref()
+        {
+            Some("exr") => self.write_exr(path),
+            Some("png") => self.write_png(path),
+            _ => Err(write_error(
+                path,
+                "unknown image format: the extension must be .exr or .png",
+            )),
+        }
+    }
+}
+
+/// Writes RGB radiance to an OpenEXR file.
+pub fn write_exr_rgb(path: &Path, w: u32, h: u32, px: &[[f32; 3]]) -> Result<(), FilmError> {
+    let wu = w as usize;
+    exr::prelude::write_rgb_file(path, wu, h as usize, |x, y| {
+        let c = px[y * wu + x];
+        (c[0], c[1], c[2])
+    })
+    .map_err(|e| write_error(path, e))
+}
+
+/// Writes display values in `[0, 1]`, sRGB encoded, to a PNG file.
+pub fn write_png_rgb(path: &Path, w: u32, h: u32, px: &[[f32; 3]]) -> Result<(), FilmError> {
+    let mut bytes = Vec::with_capacity(px.len() * 3);
+    for c in px {
+        for v in c {
+            bytes.push(tonemap::srgb8(*v));
+        }
+    }
+    let img = image::RgbImage::from_raw(w, h, bytes)
+        .ok_or_else(|| write_error(path, "image size does not match the pixels"))?;
+    img.save_with_format(path, image::ImageFormat::Png)
+        .map_err(|e| write_error(path, e))
+}

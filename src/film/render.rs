@@ -1,0 +1,508 @@
+//! The progressive render loop (paper section 6.2): the superpixel pre-render, then passes
+//! of coherent Halton groups over the tiles, in parallel with rayon (one task per tile,
+//! each calling `Backend::run`), accumulated in a fixed order so that the image does not
+//! depend on the thread count.
+
+use std::time::Instant;
+
+use coherent_simd::{Backend, Kernel, Lanes, MAX_LANES, SimdF32, SimdMask};
+use rayon::prelude::*;
+
+use super::matrix::Film;
+use super::superpixel::Superpixels;
+use super::tracer::SampleTracer;
+use super::{
+    Coherence, FilmError, FilmOptions, Fixups, Method, PassRecord, PassReport, Rendered, StopReason,
+};
+use crate::sampler::{HaltonTile, Span};
+use crate::tonemap::{Adaptation, ToneMap};
+
+/// Points traced per pre-render task.
+const POINTS_PER_TASK: usize = 256;
+
+/// Renders with the current rayon pool. The image is bit-identical for any thread count;
+/// with [`Method::Uniform`] the set of samples (positions and ids) does not depend on the
+/// packet width either. `progress` is called after each pass (pass 0 is the pre-render).
+pub fn render<T: SampleTracer>(
+    backend: Backend,
+    tracer: &T,
+    opts: &FilmOptions,
+    progress: &(dyn Fn(&PassReport) + Sync),
+) -> Result<Rendered<T::Stats>, FilmError> {
+    opts.validate()?;
+    if let Some(reason) = backend.unavailable_reason() {
+        return Err(FilmError::Backend(
+            coherent_simd::BackendError::Unavailable {
+                backend,
+                reason,
+                available: Backend::available()
+                    .iter()
+                    .map(|b| b.name())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            },
+        ));
+    }
+    let start = Instant::now();
+    let (w, h) = (opts.width, opts.height);
+    let lanes = backend.lanes();
+    let mut stats = T::Stats::default();
+    let mut fixups = Fixups::default();
+
+    // Pre-render: the superpixel corners (tone-mapping adaptation, interpolation).
+    let mut sp = Superpixels::new(w, h, opts.superpixel.0, opts.superpixel.1);
+    let points = sp.corner_positions();
+    let (colors, s) = trace_points(backend, tracer, &points)?;
+    T::merge_stats(&mut stats, s);
+    for (c, v) in sp.corners.iter_mut().zip(colors) {
+        *c = fix(v, &mut fixups);
+    }
+    let adaptation = Adaptation::from_luminances(sp.corners.iter().map(|c| luminance(*c)));
+    let floor = (0.02 * adaptation.log_average).max(1e-12);
+    let tonemap = ToneMap::new(opts.tonemap, adaptation, opts.display);
+    let id_base = points.len() as u64;
+    let mut rays = points.len() as u64;
+
+    let mut film = Film::new(w, h, sp, floor);
+    if let Method::Adaptive { accuracy, .. } = opts.method {
+        mark_interpolated(&mut film, accuracy);
+    }
+    let mut passes = Vec::new();
+    let mut record = PassRecord {
+        pass: 0,
+        span: Span { k: 0, n: 0 },
+        radius: f64::NAN,
+        rays,
+        rays_this_pass: rays,
+        groups_traced: points.len().div_ceil(lanes) as u64,
+        groups_skipped: 0,
+        seconds: start.elapsed().as_secs_f64(),
+        error: f64::NAN,
+        done: done_fraction(&film, None),
+        coherence: Coherence::default(),
+    };
+    progress(&PassReport {
+        record: record.clone(),
+        film: &film,
+    });
+    passes.push(record.clone());
+
+    let tile = opts.tile;
+    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(tile.height()))
+        .flat_map(|ty| (0..w.div_ceil(tile.width())).map(move |tx| (tx, ty)))
+        .collect();
+    let levels = Span::levels(tile);
+    let mut next_index = 0u64;
+    let mut pass = 0u32;
+    let stop = loop {
+        // What this pass traces: an index range, its span, and which pixels still need rays.
+        let (span, begin, end, need) = match opts.method {
+            Method::Uniform { spp } => {
+                if pass == spp {
+                    break StopReason::Done;
+                }
+                let b = pass as u64 * tile.block();
+                (Span::for_block(tile, lanes), b, b + tile.block(), None)
+            }
+            Method::Adaptive {
+                accuracy,
+                max_samples_per_pixel,
+                time_budget,
+            } => {
+                if pass > 0 && time_budget.is_some_and(|t| start.elapsed() >= t) {
+                    break StopReason::TimeBudget;
+                }
+                let (need, capped) = needed(&film, accuracy, max_samples_per_pixel);
+                if !need.iter().any(|&n| n) {
+                    break if capped {
+                        StopReason::SampleBudget
+                    } else {
+                        StopReason::Accuracy
+                    };
+                }
+                let span = levels[(pass as usize).min(levels.len() - 1)];
+                let b = next_index;
+                (span, b, b + span.value() * lanes as u64, Some(need))
+            }
+        };
+        next_index = end;
+        pass += 1;
+
+        let outs = tiles
+            .par_iter()
+            .map(|&(tx, ty)| {
+                backend.run(PassKernel {
+                    tracer,
+                    tile,
+                    origin: (tx * tile.width(), ty * tile.height()),
+                    width: w,
+                    height: h,
+                    begin,
+                    end,
+                    span,
+                    need: need.as_deref(),
+                    id_base,
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+
+        let mut traced = 0;
+        let mut skipped = 0;
+        let mut this_pass = 0;
+        let mut coh = Coherence::default();
+        let mut coh_sum = 0.0;
+        let mut coh_n = 0u64;
+        for o in outs {
+            for (p, k, c) in o.samples {
+                let c = fix(c, &mut fixups);
+                film.add(p as usize, k, c);
+            }
+            this_pass += o.rays;
+            traced += o.traced;
+            skipped += o.skipped;
+            coh_sum += o.dist_sum;
+            coh_n += o.dist_n;
+            coh.max_distance = coh.max_distance.max(o.dist_max);
+            coh.groups += o.multi_groups;
+            T::merge_stats(&mut stats, o.stats);
+        }
+        coh.mean_distance = if coh_n > 0 {
+            coh_sum / coh_n as f64
+        } else {
+            0.0
+        };
+        rays += this_pass;
+        record = PassRecord {
+            pass,
+            span,
+            radius: span.radius(tile),
+            rays,
+            rays_this_pass: this_pass,
+            groups_traced: traced,
+            groups_skipped: skipped,
+            seconds: start.elapsed().as_secs_f64(),
+            error: mean_error(&film),
+            done: done_fraction(&film, Some(opts)),
+            coherence: coh,
+        };
+        progress(&PassReport {
+            record: record.clone(),
+            film: &film,
+        });
+        passes.push(record.clone());
+    };
+
+    Ok(Rendered {
+        film,
+        adaptation,
+        tonemap,
+        rays,
+        passes,
+        stats,
+        fixups,
+        stop,
+    })
+}
+
+#[inline]
+fn luminance(c: [f32; 3]) -> f32 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+/// Sets NaN/infinite and negative channels to 0, counting the samples fixed.
+#[inline]
+fn fix(mut c: [f32; 3], f: &mut Fixups) -> [f32; 3] {
+    if c.iter().any(|v| !v.is_finite()) {
+        f.non_finite += 1;
+        for v in &mut c {
+            if !v.is_finite() {
+                *v = 0.0;
+            }
+        }
+    }
+    if c.iter().any(|&v| v < 0.0) {
+        f.negative += 1;
+        for v in &mut c {
+            *v = v.max(0.0);
+        }
+    }
+    c
+}
+
+/// Marks the pixels of superpixels whose corners agree within `accuracy`.
+fn mark_interpolated(film: &mut Film, accuracy: f32) {
+    let sp = &film.superpixels;
+    for v in 0..sp.ny {
+        for u in 0..sp.nx {
+            if !sp.smooth(u, v, accuracy, film.floor) {
+                continue;
+            }
+            for y in v * sp.sy..((v + 1) * sp.sy).min(film.height) {
+                for x in u * sp.sx..((u + 1) * sp.sx).min(film.width) {
+                    film.interpolated[(y * film.width + x) as usize] = true;
+                }
+            }
+        }
+    }
+}
+
+/// The largest matrix difference over the 3x3 neighbourhood of `(x, y)` (neighbours without
+/// samples in both matrices are left out), or `None` if `(x, y)` itself has none.
+fn neighbourhood_error(film: &Film, x: u32, y: u32) -> Option<f32> {
+    let p = (y * film.width + x) as usize;
+    let mut e = film.error(p)?;
+    for ny in y.saturating_sub(1)..(y + 2).min(film.height) {
+        for nx in x.saturating_sub(1)..(x + 2).min(film.width) {
+            if let Some(q) = film.error((ny * film.width + nx) as usize) {
+                e = e.max(q);
+            }
+        }
+    }
+    Some(e)
+}
+
+/// Which pixels need more rays, and whether any stopped at the sample cap unconverged.
+fn needed(film: &Film, accuracy: f32, cap: u32) -> (Vec<bool>, bool) {
+    let mut capped = false;
+    let mut need = vec![false; film.pixels()];
+    for y in 0..film.height {
+        for x in 0..film.width {
+            let p = (y * film.width + x) as usize;
+            if film.interpolated[p] {
+                continue;
+            }
+            let met = neighbourhood_error(film, x, y).is_some_and(|e| e <= accuracy);
+            if met {
+                continue;
+            }
+            if film.samples(p) >= cap {
+                capped = true;
+            } else {
+                need[p] = true;
+            }
+        }
+    }
+    (need, capped)
+}
+
+fn mean_error(film: &Film) -> f64 {
+    let (mut s, mut n) = (0.0f64, 0u64);
+    for p in 0..film.pixels() {
+        if let Some(e) = film.error(p) {
+            s += e.min(1e6) as f64;
+            n += 1;
+        }
+    }
+    if n == 0 { f64::NAN } else { s / n as f64 }
+}
+
+fn done_fraction(film: &Film, opts: Option<&FilmOptions>) -> f64 {
+    let done = match opts.map(|o| o.method) {
+        Some(Method::Adaptive {
+            accuracy,
+            max_samples_per_pixel,
+            ..
+        }) => {
+            let (need, _) = needed(film, accuracy, max_samples_per_pixel);
+            need.iter().filter(|n| !**n).count()
+        }
+        Some(Method::Uniform { .. }) => (0..film.pixels()).filter(|&p| film.samples(p) > 0).count(),
+        None => film.interpolated.iter().filter(|i| **i).count(),
+    };
+    done as f64 / film.pixels() as f64
+}
+
+/// One tile's share of a pass.
+struct TileOut<S> {
+    /// (pixel, sample number, colour), in trace order.
+    samples: Vec<(u32, u64, [f32; 3])>,
+    rays: u64,
+    traced: u64,
+    skipped: u64,
+    stats: S,
+    dist_sum: f64,
+    dist_n: u64,
+    dist_max: f64,
+    multi_groups: u64,
+}
+
+struct PassKernel<'a, T> {
+    tracer: &'a T,
+    tile: HaltonTile,
+    origin: (u32, u32),
+    width: u32,
+    height: u32,
+    begin: u64,
+    end: u64,
+    span: Span,
+    need: Option<&'a [bool]>,
+    id_base: u64,
+}
+
+impl<T: SampleTracer> Kernel for PassKernel<'_, T> {
+    type Output = TileOut<T::Stats>;
+
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) -> TileOut<T::Stats> {
+        let mut out = TileOut {
+            samples: Vec::new(),
+            rays: 0,
+            traced: 0,
+            skipped: 0,
+            stats: T::Stats::default(),
+            dist_sum: 0.0,
+            dist_n: 0,
+            dist_max: 0.0,
+            multi_groups: 0,
+        };
+        let s = self.span.value();
+        let chunk = s * L::N as u64;
+        let chunks = (self.end - self.begin).div_ceil(chunk);
+        let pixels = self.width as u64 * self.height as u64;
+        let mut xs = [0.0f32; MAX_LANES];
+        let mut ys = [0.0f32; MAX_LANES];
+        let mut ids = [0i32; MAX_LANES];
+        let mut pix = [0u32; MAX_LANES];
+        let mut knum = [0u64; MAX_LANES];
+        for c in 0..chunks {
+            let base = self.begin + c * chunk;
+            for j in 0..s {
+                // Gather the group's samples that fall on the screen.
+                let mut bits = 0u32;
+                let mut wanted = self.need.is_none();
+                for m in 0..L::N {
+                    let i = base + j + m as u64 * s;
+                    if i >= self.end {
+                        break;
+                    }
+                    let (px, py, fx, fy) = self.tile.sample(i);
+                    let (x, y) = (self.origin.0 + px, self.origin.1 + py);
+                    if x >= self.width || y >= self.height {
+                        continue;
+                    }
+                    let p = y * self.width + x;
+                    let k = self.tile.sample_number(i);
+                    xs[m] = x as f32 + fx;
+                    ys[m] = y as f32 + fy;
+                    ids[m] = (self.id_base + k * pixels + p as u64) as u32 as i32;
+                    pix[m] = p;
+                    knum[m] = k;
+                    bits |= 1 << m;
+                    if let Some(need) = self.need {
+                        wanted |= need[p as usize];
+                    }
+                }
+                if bits == 0 {
+                    continue;
+                }
+                if !wanted {
+                    out.skipped += 1;
+                    continue;
+                }
+                let active = l.mask_from_bits(bits);
+                let rgb = self.tracer.trace(
+                    l,
+                    l.load(&xs),
+                    l.load(&ys),
+                    l.load_i32(&ids),
+                    active,
+                    &mut out.stats,
+                );
+                out.traced += 1;
+                out.rays += active.count() as u64;
+                let (mut cx, mut cy, mut n) = (0.0f64, 0.0f64, 0u32);
+                for m in 0..L::N {
+                    if bits >> m & 1 == 1 {
+                        out.samples.push((
+                            pix[m],
+                            knum[m],
+                            [rgb.r.lane(m), rgb.g.lane(m), rgb.b.lane(m)],
+                        ));
+                        cx += xs[m] as f64;
+                        cy += ys[m] as f64;
+                        n += 1;
+                    }
+                }
+                if n >= 2 {
+                    let (cx, cy) = (cx / n as f64, cy / n as f64);
+                    for m in 0..L::N {
+                        if bits >> m & 1 == 1 {
+                            let d = (xs[m] as f64 - cx).hypot(ys[m] as f64 - cy);
+                            out.dist_sum += d;
+                            out.dist_n += 1;
+                            out.dist_max = out.dist_max.max(d);
+                        }
+                    }
+                    out.multi_groups += 1;
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Traces points (the pre-render) in packets, in parallel, in order; ids are the indices.
+fn trace_points<T: SampleTracer>(
+    backend: Backend,
+    tracer: &T,
+    points: &[(f32, f32)],
+) -> Result<(Vec<[f32; 3]>, T::Stats), FilmError> {
+    let outs = points
+        .par_chunks(POINTS_PER_TASK)
+        .enumerate()
+        .map(|(t, chunk)| {
+            backend.run(PointsKernel {
+                tracer,
+                points: chunk,
+                first_id: t * POINTS_PER_TASK,
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut stats = T::Stats::default();
+    let mut colors = Vec::with_capacity(points.len());
+    for (c, s) in outs {
+        colors.extend(c);
+        T::merge_stats(&mut stats, s);
+    }
+    Ok((colors, stats))
+}
+
+struct PointsKernel<'a, T> {
+    tracer: &'a T,
+    points: &'a [(f32, f32)],
+    first_id: usize,
+}
+
+impl<T: SampleTracer> Kernel for PointsKernel<'_, T> {
+    type Output = (Vec<[f32; 3]>, T::Stats);
+
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) -> Self::Output {
+        let mut stats = T::Stats::default();
+        let mut colors = Vec::with_capacity(self.points.len());
+        let mut xs = [0.0f32; MAX_LANES];
+        let mut ys = [0.0f32; MAX_LANES];
+        let mut ids = [0i32; MAX_LANES];
+        for (g, group) in self.points.chunks(L::N).enumerate() {
+            let mut bits = 0u32;
+            for m in 0..group.len() {
+                xs[m] = group[m].0;
+                ys[m] = group[m].1;
+                ids[m] = (self.first_id + g * L::N + m) as i32;
+                bits |= 1 << m;
+            }
+            let rgb = self.tracer.trace(
+                l,
+                l.load(&xs),
+                l.load(&ys),
+                l.load_i32(&ids),
+                l.mask_from_bits(bits),
+                &mut stats,
+            );
+            for m in 0..group.len() {
+                colors.push([rgb.r.lane(m), rgb.g.lane(m), rgb.b.lane(m)]);
+            }
+        }
+        (colors, stats)
+    }
+}

@@ -1,0 +1,349 @@
+//! Tests of the progressive film on analytic images (constant, step edge, NaN).
+
+use std::sync::Mutex;
+use std::time::Duration;
+
+use coherent_simd::{Backend, Lanes, Rgbs, SimdF32, SimdI32, SimdMask};
+
+use super::*;
+
+/// An analytic image: `f(x, y)` per lane; records the ids it is asked for.
+struct Analytic<F> {
+    f: F,
+    ids: Option<Mutex<Vec<i32>>>,
+}
+
+impl<F: Fn(f32, f32) -> [f32; 3] + Sync> Analytic<F> {
+    fn new(f: F) -> Self {
+        Analytic { f, ids: None }
+    }
+    fn recording(f: F) -> Self {
+        Analytic {
+            f,
+            ids: Some(Mutex::new(Vec::new())),
+        }
+    }
+}
+
+impl<F: Fn(f32, f32) -> [f32; 3] + Sync> SampleTracer for Analytic<F> {
+    type Stats = u64;
+    fn merge_stats(into: &mut u64, from: u64) {
+        *into += from;
+    }
+    fn trace<L: Lanes>(
+        &self,
+        l: L,
+        xs: L::F32s,
+        ys: L::F32s,
+        ids: L::I32s,
+        active: L::Mask,
+        stats: &mut u64,
+    ) -> Rgbs<L> {
+        let mut c = [[0.0f32; 3]; 16];
+        for (m, cm) in c.iter_mut().enumerate().take(L::N) {
+            if active.lane(m) {
+                *cm = (self.f)(xs.lane(m), ys.lane(m));
+                *stats += 1;
+                if let Some(v) = &self.ids {
+                    v.lock().unwrap().push(ids.lane(m));
+                }
+            }
+        }
+        Rgbs::new(
+            l.from_fn(|m| c[m][0]),
+            l.from_fn(|m| c[m][1]),
+            l.from_fn(|m| c[m][2]),
+        )
+    }
+}
+
+fn quiet(_: &PassReport) {}
+
+fn edge(x: f32, _y: f32) -> [f32; 3] {
+    if x < 13.3 {
+        [1.0, 0.8, 0.6]
+    } else {
+        [0.05, 0.05, 0.05]
+    }
+}
+
+fn adaptive(accuracy: f32, cap: u32) -> Method {
+    Method::Adaptive {
+        accuracy,
+        max_samples_per_pixel: cap,
+        time_budget: None,
+    }
+}
+
+#[test]
+fn uniform_gives_every_pixel_spp_samples_and_constant_exactly() {
+    let t = Analytic::new(|_, _| [0.5, 0.25, 2.0]);
+    let opts = FilmOptions::new(37, 23, Method::Uniform { spp: 3 });
+    for b in Backend::available() {
+        let r = render(b, &t, &opts, &quiet).unwrap();
+        for p in 0..r.film.pixels() {
+            assert_eq!(r.film.samples(p), 3, "{b}");
+        }
+        assert!(r.image().iter().all(|c| *c == [0.5, 0.25, 2.0]), "{b}");
+        let corners = r.film.superpixels.corners.len() as u64;
+        assert_eq!(r.rays, corners + 37 * 23 * 3, "{b}");
+        assert_eq!(r.stats, r.rays, "{b}");
+        assert_eq!(r.stop, StopReason::Done);
+    }
+}
+
+#[test]
+fn uniform_is_the_same_for_every_backend_and_thread_count() {
+    let f = |x: f32, y: f32| [(x * 0.37).sin().abs(), (y * 0.11).cos().abs(), x * y * 1e-3];
+    let opts = FilmOptions::new(40, 30, Method::Uniform { spp: 4 });
+    let mut reference: Option<(Vec<[f32; 3]>, Vec<i32>)> = None;
+    for b in Backend::available() {
+        for threads in [1, 2] {
+            let t = Analytic::recording(f);
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let r = pool.install(|| render(b, &t, &opts, &quiet)).unwrap();
+            let mut ids = t.ids.unwrap().into_inner().unwrap();
+            ids.sort();
+            let n = ids.len();
+            ids.dedup();
+            assert_eq!(ids.len(), n, "{b}: sample ids repeat");
+            let img = r.image();
+            match &reference {
+                None => reference = Some((img, ids)),
+                Some((ri, rids)) => {
+                    assert!(img == *ri, "{b} with {threads} threads: another image");
+                    assert!(ids == *rids, "{b} with {threads} threads: other sample ids");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn adaptive_interpolates_a_constant_image_exactly() {
+    let t = Analytic::new(|_, _| [0.3, 0.3, 0.3]);
+    let opts = FilmOptions::new(32, 24, adaptive(0.01, 64));
+    for b in Backend::available() {
+        let r = render(b, &t, &opts, &quiet).unwrap();
+        assert!(r.film.interpolated.iter().all(|i| *i), "{b}");
+        assert!(r.image().iter().all(|c| *c == [0.3, 0.3, 0.3]), "{b}");
+        assert_eq!(r.rays, r.film.superpixels.corners.len() as u64, "{b}");
+        assert_eq!(r.stop, StopReason::Accuracy, "{b}");
+    }
+}
+
+#[test]
+fn adaptive_subdivides_a_step_edge_and_converges_on_it() {
+    let t = Analytic::new(edge);
+    let (w, h) = (48, 24);
+    let opts = FilmOptions::new(w, h, adaptive(0.02, 256));
+    for b in Backend::available() {
+        let r = render(b, &t, &opts, &quiet).unwrap();
+        let img = r.image();
+        for y in 0..h {
+            for x in 0..w {
+                let p = (y * w + x) as usize;
+                // Superpixels (8 wide) across the edge at x = 13.3 are not interpolated.
+                if (8..16).contains(&x) {
+                    assert!(!r.film.interpolated[p], "{b}: ({x}, {y}) interpolated");
+                }
+                if x >= 24 {
+                    assert!(r.film.interpolated[p], "{b}: ({x}, {y}) not interpolated");
+                }
+                // The edge pixel's value is its coverage, within the accuracy.
+                let want = if x < 13 {
+                    1.0
+                } else if x == 13 {
+                    0.3 * 1.0 + 0.7 * 0.05
+                } else {
+                    0.05
+                };
+                assert!(
+                    (img[p][0] - want).abs() <= 0.05 * want.max(0.1),
+                    "{b}: ({x}, {y}) = {} want {want}",
+                    img[p][0]
+                );
+            }
+        }
+        // Adaptivity: far fewer rays than the sample cap everywhere.
+        assert!(r.rays < (w * h * 16) as u64, "{b}: {} rays", r.rays);
+        let edge_samples = r.film.samples((5 * w + 13) as usize);
+        assert!(
+            edge_samples >= 8,
+            "{b}: edge pixel has {edge_samples} samples"
+        );
+    }
+}
+
+#[test]
+fn error_estimate_decreases_as_passes_go() {
+    let t = Analytic::new(|x: f32, y: f32| {
+        if x + 0.7 * y < 20.0 {
+            [1.0; 3]
+        } else {
+            [0.0; 3]
+        }
+    });
+    let opts = FilmOptions::new(32, 24, Method::Uniform { spp: 32 });
+    let r = render(Backend::Scalar, &t, &opts, &quiet).unwrap();
+    let e: Vec<f64> = r.passes.iter().map(|p| p.error).collect();
+    assert!(
+        e[0].is_nan() && e[1].is_nan(),
+        "no estimate before both matrices have samples"
+    );
+    assert!(e[32] < 0.5 * e[2], "errors {e:?}");
+    assert!(e[32] < e[8] && e[8] < e[2], "errors {e:?}");
+}
+
+#[test]
+fn reaching_the_accuracy_stops_tracing() {
+    let t = Analytic::new(edge);
+    let loose = render(
+        Backend::Scalar,
+        &t,
+        &FilmOptions::new(32, 24, adaptive(0.2, 1024)),
+        &quiet,
+    )
+    .unwrap();
+    let tight = render(
+        Backend::Scalar,
+        &t,
+        &FilmOptions::new(32, 24, adaptive(0.001, 1024)),
+        &quiet,
+    )
+    .unwrap();
+    assert_eq!(loose.stop, StopReason::Accuracy);
+    assert!(loose.rays < tight.rays, "{} vs {}", loose.rays, tight.rays);
+    // The last pass of a converged render traced nothing new that was needed: stopping
+    // happened because no pixel needed rays, not because of the cap.
+    let max = (0..loose.film.pixels())
+        .map(|p| loose.film.samples(p))
+        .max();
+    assert!(max < Some(1024), "{max:?}");
+    let capped = render(
+        Backend::Scalar,
+        &t,
+        &FilmOptions::new(32, 24, adaptive(1e-6, 8)),
+        &quiet,
+    )
+    .unwrap();
+    assert_eq!(capped.stop, StopReason::SampleBudget);
+    assert!((0..capped.film.pixels()).all(|p| capped.film.samples(p) <= 8 + 1));
+}
+
+#[test]
+fn time_budget_stops_after_a_pass() {
+    let t = Analytic::new(edge);
+    let m = Method::Adaptive {
+        accuracy: 1e-6,
+        max_samples_per_pixel: 1 << 20,
+        time_budget: Some(Duration::ZERO),
+    };
+    let r = render(Backend::Scalar, &t, &FilmOptions::new(32, 24, m), &quiet).unwrap();
+    assert_eq!(r.stop, StopReason::TimeBudget);
+    assert_eq!(r.passes.len(), 2);
+    assert!(r.image().iter().all(|c| c.iter().all(|v| v.is_finite())));
+}
+
+#[test]
+fn progress_sees_every_pass() {
+    let t = Analytic::new(edge);
+    let seen = Mutex::new(Vec::new());
+    let r = render(
+        Backend::Scalar,
+        &t,
+        &FilmOptions::new(16, 9, Method::Uniform { spp: 2 }),
+        &|p: &PassReport| {
+            seen.lock()
+                .unwrap()
+                .push((p.record.pass, p.film.estimate().len()))
+        },
+    )
+    .unwrap();
+    assert_eq!(*seen.lock().unwrap(), vec![(0, 144), (1, 144), (2, 144)]);
+    assert_eq!(r.passes.len(), 3);
+}
+
+#[test]
+fn bad_resolutions_and_options_are_clear_errors() {
+    let t = Analytic::new(edge);
+    for (w, h) in [(0, 10), (10, 0), (100_000, 10), (16_000, 16_000)] {
+        let e = render(
+            Backend::Scalar,
+            &t,
+            &FilmOptions::new(w, h, Method::Uniform { spp: 1 }),
+            &quiet,
+        )
+        .err()
+        .unwrap()
+        .to_string();
+        assert!(e.contains(&format!("{w}x{h}")), "{e}");
+    }
+    for m in [
+        Method::Uniform { spp: 0 },
+        adaptive(0.0, 4),
+        adaptive(f32::NAN, 4),
+        adaptive(0.1, 0),
+    ] {
+        let e = render(Backend::Scalar, &t, &FilmOptions::new(8, 8, m), &quiet);
+        assert!(matches!(e, Err(FilmError::Options(_))), "{m:?}");
+    }
+}
+
+#[test]
+fn nan_and_negative_radiance_are_counted_and_fixed() {
+    let t = Analytic::new(|x: f32, _| {
+        if x < 4.0 {
+            [f32::NAN, 1.0, 1.0]
+        } else if x < 8.0 {
+            [-1.0, 1.0, 1.0]
+        } else {
+            [1.0; 3]
+        }
+    });
+    let r = render(
+        Backend::Scalar,
+        &t,
+        &FilmOptions::new(16, 9, Method::Uniform { spp: 2 }),
+        &quiet,
+    )
+    .unwrap();
+    assert!(r.fixups.non_finite >= 4 * 9 * 2, "{:?}", r.fixups);
+    assert!(r.fixups.negative >= 4 * 9 * 2, "{:?}", r.fixups);
+    assert!(
+        r.image()
+            .iter()
+            .all(|c| c.iter().all(|v| v.is_finite() && *v >= 0.0))
+    );
+}
+
+#[test]
+fn images_are_written_and_bad_paths_named() {
+    let t = Analytic::new(edge);
+    let r = render(
+        Backend::Scalar,
+        &t,
+        &FilmOptions::new(16, 9, Method::Uniform { spp: 1 }),
+        &quiet,
+    )
+    .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["a.exr", "a.png"] {
+        r.write(&dir.path().join(name)).unwrap();
+        assert!(std::fs::metadata(dir.path().join(name)).unwrap().len() > 0);
+    }
+    r.write_matrix_exr(1, &dir.path().join("m1.exr")).unwrap();
+    let bad = dir.path().join("missing/dir/x.exr");
+    let e = r.write(&bad).unwrap_err().to_string();
+    assert!(e.contains("missing/dir/x.exr"), "{e}");
+    let e = r.write(&dir.path().join("x.bmp")).unwrap_err().to_string();
+    assert!(e.contains("x.bmp") && e.contains(".png"), "{e}");
+    let e = r
+        .write_png(&dir.path().join("missing/y.png"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("y.png"), "{e}");
+}

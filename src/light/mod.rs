@@ -1,0 +1,402 @@
+//! Coherent lights (paper section 5): the eight kinds of the paper and HDR environments,
+//! each evaluated for a packet of shading points under a mask, one light at a time.
+//! Lanes that need no lighting (outside the mask, facing away from the sample, outside a
+//! spot's cone) are masked off and get zero radiance.
+//!
+//! Units: point lights carry a radiant intensity `I` (W/sr per RGB channel), parallel
+//! lights an irradiance `E` (W/m^2 on a surface facing them), surface lights and the
+//! environment a radiance `L` (W/(m^2 sr)). Goniodiagram files are photometric (candela):
+//! [`photometry::WATTS_PER_LUMEN`] is the one place the units are converted.
+//!
+//! A light gives, per shading point, [`Light::samples`] samples; each sample is a direction
+//! `wi`, a distance for the shadow ray and `li`, the incident radiance times the sample's
+//! weight, so that the reflected radiance is `sum_k f(wi_k, wo) cos(theta_k) li_k`.
+
+// Index loops, not iterator adapters, in the per-packet code (see `tabulated`).
+#![allow(clippy::needless_range_loop)]
+
+pub mod circular;
+pub mod direct;
+pub mod linear;
+pub mod omni;
+pub mod parallel;
+pub mod rectangular;
+pub mod sincos;
+pub mod spot;
+pub mod strata;
+
+use std::path::PathBuf;
+
+use coherent_accel::Rays;
+use coherent_simd::{Lanes, Rgbs, SimdF32, SimdMask, Vec3s};
+use glam::Vec3;
+use thiserror::Error;
+
+pub use circular::Circular;
+pub use direct::Direct;
+pub use linear::Linear;
+pub use omni::Omni;
+pub use parallel::Parallel;
+pub use rectangular::Rectangular;
+pub use spot::{Spot, SpotFalloff};
+pub use strata::Strata;
+
+/// A light of any kind.
+#[derive(Debug, Clone)]
+pub enum Light {
+    Omni(Omni),
+    Spot(Spot),
+    Parallel(Parallel),
+    Direct(Direct),
+    Linear(Linear),
+    Circular(Circular),
+    Rectangular(Rectangular),
+}
+
+/// The kinds of light, by the names used in scene files and results.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum LightKind {
+    Omni,
+    Spot,
+    Parallel,
+    Direct,
+    Linear,
+    Circular,
+    Rectangular,
+    Goniodiagram,
+    Environment,
+}
+
+impl LightKind {
+    /// Every kind, in the paper's Table 2 order (the environment last).
+    pub const ALL: [LightKind; 9] = [
+        LightKind::Omni,
+        LightKind::Spot,
+        LightKind::Parallel,
+        LightKind::Direct,
+        LightKind::Linear,
+        LightKind::Circular,
+        LightKind::Rectangular,
+        LightKind::Goniodiagram,
+        LightKind::Environment,
+    ];
+
+    /// The name used in scene files and results.
+    pub fn name(self) -> &'static str {
+        match self {
+            LightKind::Omni => "omni",
+            LightKind::Spot => "spot",
+            LightKind::Parallel => "parallel",
+            LightKind::Direct => "direct",
+            LightKind::Linear => "linear",
+            LightKind::Circular => "circular",
+            LightKind::Rectangular => "rectangular",
+            LightKind::Goniodiagram => "goniodiagram",
+            LightKind::Environment => "environment",
+        }
+    }
+}
+
+impl std::fmt::Display for LightKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for LightKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        LightKind::ALL
+            .into_iter()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| {
+                let names: Vec<_> = LightKind::ALL.iter().map(|k| k.name()).collect();
+                format!("unknown light kind `{s}`; kinds: {}", names.join(", "))
+            })
+    }
+}
+
+/// One sample of a light for a packet of shading points (see the module documentation).
+pub struct LightSample<L: Lanes> {
+    /// Lanes this sample lights (facing it, inside the cone, non-zero); the rest are zero.
+    pub active: L::Mask,
+    /// Unit direction from the shading point towards the sample (the normal on inactive lanes).
+    pub wi: Vec3s<L>,
+    /// Distance to the sample point (`f32::INFINITY` for parallel and environment; 0 on
+    /// inactive lanes).
+    pub dist: L::F32s,
+    /// Incident radiance times the sample's weight.
+    pub li: Rgbs<L>,
+}
+
+impl<L: Lanes> Clone for LightSample<L> {
+    #[inline(always)]
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<L: Lanes> Copy for LightSample<L> {}
+
+impl<L: Lanes> std::fmt::Debug for LightSample<L> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LightSample")
+            .field("active", &self.active.bitmask())
+            .field("wi", &self.wi)
+            .field("dist", &self.dist)
+            .field("li", &self.li)
+            .finish()
+    }
+}
+
+/// A light that cannot be built: the light or file, the field (and line), the problem.
+#[derive(Debug, Error)]
+pub enum LightError {
+    #[error("{light} light: {field} is {value}, {expected}")]
+    BadParameter {
+        light: &'static str,
+        field: &'static str,
+        value: String,
+        expected: &'static str,
+    },
+    #[error("{}: cannot read: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{}:{line}: {field}: {problem}", path.display())]
+    Parse {
+        path: PathBuf,
+        line: usize,
+        field: String,
+        problem: String,
+    },
+    #[error("{}: {problem}", path.display())]
+    File { path: PathBuf, problem: String },
+}
+
+impl LightError {
+    pub(crate) fn bad(
+        light: &'static str,
+        field: &'static str,
+        value: impl std::fmt::Debug,
+        expected: &'static str,
+    ) -> LightError {
+        LightError::BadParameter {
+            light,
+            field,
+            value: format!("{value:?}"),
+            expected,
+        }
+    }
+}
+
+/// Checks that `v` is finite.
+pub(crate) fn check_point(
+    light: &'static str,
+    field: &'static str,
+    v: Vec3,
+) -> Result<Vec3, LightError> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(LightError::bad(light, field, v, "not a finite point"))
+    }
+}
+
+/// Checks that `v` is finite and not zero, and returns it normalised.
+pub(crate) fn check_dir(
+    light: &'static str,
+    field: &'static str,
+    v: Vec3,
+) -> Result<Vec3, LightError> {
+    let n = v.normalize_or_zero();
+    if v.is_finite() && n != Vec3::ZERO {
+        Ok(n)
+    } else {
+        Err(LightError::bad(
+            light,
+            field,
+            v,
+            "not a finite non-zero direction",
+        ))
+    }
+}
+
+/// Checks that every channel of `c` is finite and non-negative.
+pub(crate) fn check_colour(
+    light: &'static str,
+    field: &'static str,
+    c: [f32; 3],
+) -> Result<[f32; 3], LightError> {
+    if c.iter().all(|x| x.is_finite() && *x >= 0.0) {
+        Ok(c)
+    } else {
+        Err(LightError::bad(
+            light,
+            field,
+            c,
+            "not finite and non-negative in every channel",
+        ))
+    }
+}
+
+/// Checks that `x` is finite and positive.
+pub(crate) fn check_positive(
+    light: &'static str,
+    field: &'static str,
+    x: f32,
+) -> Result<f32, LightError> {
+    if x.is_finite() && x > 0.0 {
+        Ok(x)
+    } else {
+        Err(LightError::bad(
+            light,
+            field,
+            x,
+            "not a finite positive number",
+        ))
+    }
+}
+
+impl Light {
+    /// This light's kind.
+    pub fn kind(&self) -> LightKind {
+        match self {
+            Light::Omni(_) => LightKind::Omni,
+            Light::Spot(_) => LightKind::Spot,
+            Light::Parallel(_) => LightKind::Parallel,
+            Light::Direct(_) => LightKind::Direct,
+            Light::Linear(_) => LightKind::Linear,
+            Light::Circular(_) => LightKind::Circular,
+            Light::Rectangular(_) => LightKind::Rectangular,
+        }
+    }
+
+    /// Sample points per shading point (1 for point lights).
+    pub fn samples(&self) -> u32 {
+        match self {
+            Light::Omni(_) | Light::Spot(_) | Light::Parallel(_) | Light::Direct(_) => 1,
+            Light::Linear(x) => x.samples(),
+            Light::Circular(x) => x.samples(),
+            Light::Rectangular(x) => x.samples(),
+        }
+    }
+
+    /// Sample `k` (in `0..samples()`) of this light for the shading points `p` with unit
+    /// normals `n`, on the lanes of `active`. `u` are per-lane uniform numbers in `[0, 1)`:
+    /// surface lights jitter stratum `k` with them (when built to), the environment
+    /// importance-samples with them; point lights ignore them.
+    #[inline(always)]
+    pub fn sample<L: Lanes>(
+        &self,
+        l: L,
+        p: &Vec3s<L>,
+        n: &Vec3s<L>,
+        active: L::Mask,
+        k: u32,
+        u: [L::F32s; 2],
+    ) -> LightSample<L> {
+        match self {
+            Light::Omni(x) => x.sample(l, p, n, active),
+            Light::Spot(x) => x.sample(l, p, n, active),
+            Light::Parallel(x) => x.sample(l, p, n, active),
+            Light::Direct(x) => x.sample(l, p, n, active),
+            Light::Linear(x) => x.sample(l, p, n, active, k, u),
+            Light::Circular(x) => x.sample(l, p, n, active, k, u),
+            Light::Rectangular(x) => x.sample(l, p, n, active, k, u),
+        }
+    }
+
+    /// What a ray in direction `dir` (unit) that misses everything sees of this light: the
+    /// environment map's radiance, zero for the other kinds.
+    #[inline(always)]
+    pub fn radiance_seen<L: Lanes>(&self, l: L, dir: &Vec3s<L>) -> Rgbs<L> {
+        let _ = dir;
+        Rgbs::zero(l)
+    }
+}
+
+/// Relative offset of shadow ray origins along the normal (times `1 + max |p_i|`).
+pub const SHADOW_OFFSET: f32 = 1e-4;
+/// Shadow rays stop this fraction short of the sample point (which may lie on a surface).
+pub const SHADOW_SHORTEN: f32 = 1e-4;
+
+/// The shadow packet of a sample: origins moved off the surface along `n` (by
+/// [`SHADOW_OFFSET`] times the point's magnitude plus one), directions `wi`, `t` in
+/// `[0, dist * (1 - SHADOW_SHORTEN))`. Trace it with `Accel::occluded` under `s.active`.
+#[inline(always)]
+pub fn shadow_rays<L: Lanes>(l: L, p: &Vec3s<L>, n: &Vec3s<L>, s: &LightSample<L>) -> Rays<L> {
+    let scale = p.x.abs().max(p.y.abs()).max(p.z.abs()) + 1.0;
+    let origin = n.mul_add(scale * SHADOW_OFFSET, *p);
+    Rays {
+        origin,
+        dir: s.wi,
+        tmin: l.splat(0.0),
+        tmax: s.dist * (1.0 - SHADOW_SHORTEN),
+    }
+}
+
+/// The direction and distance from shading points to sample points `q`, with the lanes
+/// that face them.
+pub(crate) struct Toward<L: Lanes> {
+    pub active: L::Mask,
+    pub wi: Vec3s<L>,
+    pub dist: L::F32s,
+    /// `1 / dist^2`.
+    pub inv_d2: L::F32s,
+}
+
+/// From `p` (normals `n`) towards the points `q`: lanes at the point itself, behind the
+/// surface (`n . wi <= 0`) or with a non-finite distance are masked off.
+#[inline(always)]
+pub(crate) fn toward<L: Lanes>(
+    l: L,
+    p: &Vec3s<L>,
+    n: &Vec3s<L>,
+    active: L::Mask,
+    q: &Vec3s<L>,
+) -> Toward<L> {
+    let d = *q - *p;
+    let d2 = d.length_squared();
+    let dist = d2.sqrt();
+    let inv = l.splat(1.0) / dist;
+    let wi = d * inv;
+    let zero = l.splat(0.0);
+    let active = active & d2.gt(zero) & d2.lt(l.splat(f32::INFINITY)) & n.dot(wi).gt(zero);
+    Toward {
+        active,
+        wi,
+        dist,
+        inv_d2: inv * inv,
+    }
+}
+
+/// A sample from its parts, with the inactive lanes cleaned (direction `n`, distance 0,
+/// radiance 0).
+#[inline(always)]
+pub(crate) fn finish<L: Lanes>(
+    l: L,
+    n: &Vec3s<L>,
+    active: L::Mask,
+    wi: Vec3s<L>,
+    dist: L::F32s,
+    li: Rgbs<L>,
+) -> LightSample<L> {
+    let zero = l.splat(0.0);
+    LightSample {
+        active,
+        wi: Vec3s::select(active, wi, *n),
+        dist: active.select(dist, zero),
+        li: Rgbs::select(active, li, Rgbs::zero(l)),
+    }
+}
+
+/// `c` scaled by one value per lane.
+#[inline(always)]
+pub(crate) fn scaled<L: Lanes>(l: L, c: [f32; 3], s: L::F32s) -> Rgbs<L> {
+    Rgbs::new(l.splat(c[0]) * s, l.splat(c[1]) * s, l.splat(c[2]) * s)
+}
+
+#[cfg(test)]
+pub(crate) mod test_util;
