@@ -7,8 +7,10 @@
 //! Lanes within [`EDGE`] of a mask's edge (grazing, a cone's border) may differ in the
 //! mask and are skipped.
 
+use coherent::light::photometry::{PhotometricTable, PhotometricType};
 use coherent::light::{
-    Circular, Direct, Light, Linear, Omni, Parallel, Rectangular, Spot, SpotFalloff, shadow_rays,
+    Circular, Direct, GonioLookup, Goniodiagram, Light, Linear, Omni, Parallel, Rectangular, Spot,
+    SpotFalloff, shadow_rays,
 };
 use coherent::simd::{Backend, Kernel, Lanes, SimdF32, SimdMask, Vec3s};
 use glam::Vec3;
@@ -87,7 +89,44 @@ pub fn lights() -> Vec<Light> {
             )
             .unwrap(),
         ),
+        gonio(PhotometricType::C, GonioLookup::Search),
+        gonio(PhotometricType::C, GonioLookup::Uniform),
+        gonio(PhotometricType::B, GonioLookup::Search),
     ]
+}
+
+/// A goniodiagram light from a smooth made-up table with quadrant symmetry (type C) or
+/// floodlight planes (type B), aimed down from above the points.
+fn gonio(kind: PhotometricType, lookup: GonioLookup) -> Light {
+    let planes: Vec<f32> = vec![0.0, 10.0, 25.0, 45.0, 70.0, 90.0];
+    let angles: Vec<f32> = match kind {
+        PhotometricType::C => vec![0.0, 5.0, 15.0, 30.0, 50.0, 70.0, 90.0, 135.0, 180.0],
+        _ => vec![-90.0, -45.0, -20.0, 0.0, 20.0, 45.0, 90.0],
+    };
+    let mut candela = Vec::new();
+    for &c in &planes {
+        for &g in &angles {
+            candela.push(500.0 + 300.0 * g.to_radians().cos() + 40.0 * (c / 30.0).sin());
+        }
+    }
+    let table = PhotometricTable {
+        kind,
+        planes,
+        angles,
+        candela,
+    };
+    Light::Goniodiagram(
+        Goniodiagram::new(
+            Vec3::new(0.2, 0.1, 1.8),
+            Vec3::Z,
+            Vec3::X,
+            &table,
+            [1.0, 0.8, 0.6],
+            lookup,
+            std::path::Path::new("made-up"),
+        )
+        .unwrap(),
+    )
 }
 
 /// Shading points on a bumpy surface, normals mostly up, some down or grazing.

@@ -17,9 +17,11 @@
 
 pub mod circular;
 pub mod direct;
+pub mod goniodiagram;
 pub mod linear;
 pub mod omni;
 pub mod parallel;
+pub mod photometry;
 pub mod rectangular;
 pub mod sincos;
 pub mod spot;
@@ -34,6 +36,7 @@ use thiserror::Error;
 
 pub use circular::Circular;
 pub use direct::Direct;
+pub use goniodiagram::{GonioLookup, Goniodiagram};
 pub use linear::Linear;
 pub use omni::Omni;
 pub use parallel::Parallel;
@@ -51,6 +54,7 @@ pub enum Light {
     Linear(Linear),
     Circular(Circular),
     Rectangular(Rectangular),
+    Goniodiagram(Goniodiagram),
 }
 
 /// The kinds of light, by the names used in scene files and results.
@@ -270,13 +274,18 @@ impl Light {
             Light::Linear(_) => LightKind::Linear,
             Light::Circular(_) => LightKind::Circular,
             Light::Rectangular(_) => LightKind::Rectangular,
+            Light::Goniodiagram(_) => LightKind::Goniodiagram,
         }
     }
 
     /// Sample points per shading point (1 for point lights).
     pub fn samples(&self) -> u32 {
         match self {
-            Light::Omni(_) | Light::Spot(_) | Light::Parallel(_) | Light::Direct(_) => 1,
+            Light::Omni(_)
+            | Light::Spot(_)
+            | Light::Parallel(_)
+            | Light::Direct(_)
+            | Light::Goniodiagram(_) => 1,
             Light::Linear(x) => x.samples(),
             Light::Circular(x) => x.samples(),
             Light::Rectangular(x) => x.samples(),
@@ -305,6 +314,7 @@ impl Light {
             Light::Linear(x) => x.sample(l, p, n, active, k, u),
             Light::Circular(x) => x.sample(l, p, n, active, k, u),
             Light::Rectangular(x) => x.sample(l, p, n, active, k, u),
+            Light::Goniodiagram(x) => x.sample(l, p, n, active),
         }
     }
 
