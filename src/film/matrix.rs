@@ -5,6 +5,22 @@
 use super::accuracy::relative_difference;
 use super::superpixel::Superpixels;
 
+/// Which matrix sample number `k` of pixel `p` goes to. Not simply `k % 2`: a pixel's
+/// Halton samples of even and odd `k` lie in its left and right halves (the lowest binary
+/// digit of the index above the tile's digits is `k`'s), so the two matrices would estimate
+/// different things and never agree at an edge. Each pair `(2j, 2j + 1)` is split between
+/// the matrices, which one gets the first decided by a hash of `(p, j)`: each matrix gets
+/// half the samples, stratified in expectation.
+#[inline]
+pub fn matrix_of(p: u64, k: u64) -> usize {
+    let mut h =
+        p.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ (k >> 1).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    h ^= h >> 31;
+    h = h.wrapping_mul(0x94d0_49bb_1331_11eb);
+    h ^= h >> 29;
+    ((k ^ (h >> 7)) & 1) as usize
+}
+
 /// Colour sums and sample counts per pixel.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ScreenMatrix {
@@ -68,10 +84,10 @@ impl Film {
         self.matrices[0].count[p] + self.matrices[1].count[p]
     }
 
-    /// Adds sample number `k` of pixel `p` (to matrix `k % 2`).
+    /// Adds sample number `k` of pixel `p` to matrix [`matrix_of`]`(p, k)`.
     #[inline]
     pub(crate) fn add(&mut self, p: usize, k: u64, c: [f32; 3]) {
-        let m = &mut self.matrices[(k % 2) as usize];
+        let m = &mut self.matrices[matrix_of(p as u64, k)];
         m.count[p] += 1;
         for (s, v) in m.sum[p].iter_mut().zip(c) {
             *s += v as f64;

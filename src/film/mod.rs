@@ -17,7 +17,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 pub use accuracy::relative_difference;
-pub use matrix::{Film, ScreenMatrix};
+pub use matrix::{Film, ScreenMatrix, matrix_of};
 pub use render::render;
 pub use superpixel::Superpixels;
 pub use tracer::SampleTracer;

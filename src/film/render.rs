@@ -58,7 +58,12 @@ pub fn render<T: SampleTracer>(
         *c = fix(v, &mut fixups);
     }
     let adaptation = Adaptation::from_luminances(sp.corners.iter().map(|c| luminance(*c)));
-    let floor = (0.02 * adaptation.log_average).max(1e-12);
+    // Noise floor of the accuracy measure: 5% of the pre-render's mean luminance (not of its
+    // log average, which black regions drag towards 0 and with it every dark pixel's
+    // relative difference towards 2).
+    let mean_lum =
+        sp.corners.iter().map(|c| luminance(*c) as f64).sum::<f64>() / sp.corners.len() as f64;
+    let floor = ((0.05 * mean_lum) as f32).max(1e-12);
     let tonemap = ToneMap::new(opts.tonemap, adaptation, opts.display);
     let id_base = points.len() as u64;
     let mut rays = points.len() as u64;
