@@ -56,10 +56,7 @@ fn emissive(name: &str, c: [f32; 3]) -> Material {
 }
 
 fn omni(position: Vec3, intensity: [f32; 3]) -> Light {
-    Light::Omni(coherent::light::Omni {
-        position,
-        intensity,
-    })
+    Light::Omni(coherent::light::Omni::new(position, intensity).unwrap())
 }
 
 fn render(s: &RenderScene, backend: Backend, kind: AccelKind) -> Option<Vec<[f32; 3]>> {

@@ -379,3 +379,24 @@ pub fn refract<L: Lanes>(
     let t_dir = *dir * inv_eta + n_in * (cos_i * inv_eta - cos_t);
     (t_dir, inv_eta, tir)
 }
+
+impl<A: Accel> crate::film::SampleTracer for Renderer<'_, A> {
+    type Stats = RenderStats;
+
+    fn merge_stats(into: &mut RenderStats, from: RenderStats) {
+        into.merge(from);
+    }
+
+    #[inline(always)]
+    fn trace<L: Lanes>(
+        &self,
+        l: L,
+        xs: L::F32s,
+        ys: L::F32s,
+        ids: L::I32s,
+        active: L::Mask,
+        stats: &mut RenderStats,
+    ) -> Rgbs<L> {
+        self.trace_packet(l, xs, ys, ids, active, stats)
+    }
+}

@@ -37,7 +37,7 @@ pub struct RenderScene {
     /// Mesh id + world_from_object.
     pub instances: Vec<Instance>,
     pub materials: Vec<Material>,
-    // TODO(lights): `pub lights: Vec<crate::light::Light>` once the lights branch is merged.
+    pub lights: Vec<crate::light::Light>,
     pub camera: Camera,
     pub width: u32,
     pub height: u32,

@@ -111,6 +111,7 @@ pub fn cornell() -> RenderScene {
     // TODO(lights): one light under the ceiling (a rectangular area light at y = 1.98) once
     // the lights branch is merged.
     RenderScene {
+        lights: Vec::new(),
         name: "cornell".to_string(),
         meshes: vec![room, tall_box, sphere],
         instances,
