@@ -381,20 +381,62 @@ fn total_internal_reflection_starts_at_the_critical_angle() {
     }
 }
 
-#[test]
-fn every_backend_and_accelerator_renders_the_scalar_bsp_image() {
-    let scenes: Vec<RenderScene> = coherent::scene::builtin_names()
+/// A lit, textured, reflective and refractive scene: the built-in room with an omni light,
+/// a textured floor and depth 2.
+fn lit_scenes() -> Vec<RenderScene> {
+    let mut out: Vec<RenderScene> = coherent::scene::builtin_names()
         .iter()
         .map(|(n, _)| coherent::scene::load(n).unwrap())
-        .chain([mirror_scene(), slab_scene(1.5)])
         .collect();
-    for sc in &scenes {
+    out.push(mirror_scene());
+    out.push(slab_scene(1.5));
+    for s in &mut out {
+        if s.lights.is_empty() {
+            let c = s.camera.position;
+            s.lights
+                .push(omni(c + Vec3::new(0.7, 0.9, -0.5), [4.0, 4.0, 4.0]));
+        }
+    }
+    // A textured Phong floor under the light.
+    let mut tex = Material::phong("textured", [0.7; 3], [0.3; 3], 20.0);
+    tex.texture = Some(std::sync::Arc::new(
+        coherent::texture::workload::pattern_texture(64),
+    ));
+    let m = out[0].materials.len() as u32;
+    let floor = quad(
+        "textured floor",
+        [
+            Vec3::new(-1.0, 0.001, 1.0),
+            Vec3::new(1.0, 0.001, 1.0),
+            Vec3::new(1.0, 0.001, -1.0),
+            Vec3::new(-1.0, 0.001, -1.0),
+        ],
+        m,
+    )
+    .with_uvs(vec![
+        glam::Vec2::new(0.0, 0.0),
+        glam::Vec2::new(4.0, 0.0),
+        glam::Vec2::new(4.0, 4.0),
+        glam::Vec2::new(0.0, 4.0),
+    ]);
+    let s0 = &mut out[0];
+    s0.materials.push(tex);
+    s0.instances.push(Instance::identity(s0.meshes.len()));
+    s0.meshes.push(floor);
+    s0.validate().unwrap();
+    out
+}
+
+#[test]
+fn every_backend_and_accelerator_renders_the_scalar_bsp_image() {
+    for sc in &lit_scenes() {
         let reference = scalar_bsp(sc);
         let peak = reference
             .iter()
             .flat_map(|c| c.iter().copied())
             .fold(0.0f32, f32::max)
             .max(1e-3);
+        assert!(peak > 0.01, "{}: the image is black", sc.name);
         for backend in Backend::ALL {
             if let Some(why) = backend.unavailable_reason() {
                 eprintln!("skipping backend {}: {why}", backend.name());
@@ -421,4 +463,30 @@ fn every_backend_and_accelerator_renders_the_scalar_bsp_image() {
             }
         }
     }
+}
+
+#[test]
+fn the_thread_count_does_not_change_the_image() {
+    use coherent::film::{FilmOptions, Method, render};
+    let sc = &lit_scenes()[0];
+    let accel = AnyAccel::build(&sc.accel_scene(), &AnyParams::of(AccelKind::Bsp)).unwrap();
+    let r = Renderer::new(sc, accel, W, H).unwrap();
+    let backend = Backend::available()
+        .into_iter()
+        .max_by_key(|b| b.lanes())
+        .unwrap();
+    let opts = FilmOptions::new(W, H, Method::Uniform { spp: 2 });
+    let mut images = Vec::new();
+    for threads in [1, 3] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let out = pool
+            .install(|| render(backend, &r, &opts, &|_| {}))
+            .unwrap();
+        assert!(out.stats.rays(RayKind::Shadow) > 0);
+        images.push(out.image());
+    }
+    assert!(images[0] == images[1], "1 and 3 threads gave different images");
 }
