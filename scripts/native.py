@@ -5,13 +5,19 @@
           into .native/embree/lib/ (the Embree backend loads it at run time).
   meshes  Real test meshes out of Debian packages (the Stanford bunny from glmark2-data,
           OFF meshes from libcgal-demo), into .cache/meshes/.
+  photometry  Real goniodiagram files, as test data only (never linked): the IES LM-63-2002
+          and EULUMDAT examples inside the lidrs crate 0.2.3 (crates.io, MIT) and the six
+          manufacturer .ldt fixtures of the eulumdat 0.7.1 sdist (PyPI), into
+          .cache/photometry/.
+  hdr     Real HDR latitude-longitude maps: the eight CC0 studio-light worlds of Debian's
+          blender-data 3.4.1 (DWAB-compressed EXR, which the exr crate reads), into .cache/hdr/.
 
 Idempotent and quiet when everything is in place: files already there are checked against
 their recorded sha256 and only fetched again when missing or changed. Exit status: 0 when
 Embree is usable (a mesh that cannot be fetched is a warning: the experiments say so and go
 on without it), 1 when Embree could not be set up (the message names the cause and the fix).
 
-Usage: python3 scripts/native.py [embree] [meshes]      (no argument: both)
+Usage: python3 scripts/native.py [embree] [meshes] [photometry] [hdr]      (no argument: all)
 Environment: EMBREE_DIR=<an Embree 4 install> skips the wheel (the backend loads from there).
 """
 
@@ -30,6 +36,18 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 NATIVE = ROOT / ".native"
 MESHES = ROOT / ".cache" / "meshes"
+PHOTOMETRY = ROOT / ".cache" / "photometry"
+HDR = ROOT / ".cache" / "hdr"
+
+# Debian bookworm's blender-data: the studio-light world maps (CC0, see its license.txt).
+HDR_DEB = {
+    "package": "blender-data",
+    "version": "3.4.1+dfsg-2",
+    "sha256": "5ceaf56a49ba3ded95c751d739aeec3d19e7fad76fba5cb70666986af9303b0e",
+    "folder": "usr/share/blender/datafiles/studiolights/world",
+    "members": ["city.exr", "courtyard.exr", "forest.exr", "interior.exr", "night.exr",
+                "studio.exr", "sunrise.exr", "sunset.exr", "license.txt"],
+}
 
 # The Embree 4.4 library as built by the embreex project (manylinux, x86-64). The wheel is
 # tagged per CPython version; the library inside is the same, so one exact file is pinned
@@ -57,6 +75,34 @@ MESH_DEBS = [
         "version": "5.5.1-2",
         "sha256": "78b09b23d4d6d1bf15552a1060b419ab3fc09918486462faed197e5fc6ac3735",
         "members": [],  # filled in below: OFF files from the demo data archive
+    },
+]
+
+
+# Goniodiagram files: archives pinned by sha256, and the members taken out of each
+# (path inside the archive, name in .cache/photometry/).
+PHOTOMETRY_ARCHIVES = [
+    {
+        "what": "lidrs 0.2.3 (crates.io)",
+        "url": "https://static.crates.io/crates/lidrs/lidrs-0.2.3.crate",
+        "sha256": "2f66dc03c76e9977546d53573b94578aad2c1c9e24a3318832acb56fd2f1f040",
+        "members": [
+            ("lidrs-0.2.3/src/io/ies/iesna2002_example_typec.ies", "lidrs_iesna2002_example_typec.ies"),
+            ("lidrs-0.2.3/src/io/eulumdat/example.ldt", "lidrs_example.ldt"),
+        ],
+    },
+    {
+        # The sdist's URL as PyPI's simple index (PEP 503) lists it; `pip download` of this
+        # sdist would also build its Rust extension's metadata, which the data does not need.
+        "what": "eulumdat 0.7.1 sdist (PyPI)",
+        "url": "https://files.pythonhosted.org/packages/6f/df/"
+               "9ad6fdaf922d5134eca47095686401b84dbf281ad3c95a3aaadb28b1b793/eulumdat-0.7.1.tar.gz",
+        "sha256": "639f7e907eea96e832ae036a9588cc03f1c03ea97d9c8166a6d1223c56d3fead",
+        "members": [
+            (f"eulumdat-0.7.1/crates/eulumdat/tests/fixtures/{name}", f"eulumdat_{name}")
+            for name in ["acrux_452lm.ldt", "alya_359lm.ldt", "biolux_dn150.ldt", "sensor.ldt",
+                         "variant2_sensor_wide.ldt", "wide_luminaire.ldt"]
+        ],
     },
 ]
 
@@ -243,11 +289,63 @@ def setup_meshes():
             say(f"warning: meshes from {spec['package']} unavailable: {e}")
 
 
+def download(url, dest):
+    """Fetches one registry file over HTTPS."""
+    import urllib.request
+    try:
+        with urllib.request.urlopen(url, timeout=120) as r, open(dest, "wb") as f:
+            shutil.copyfileobj(r, f)
+    except OSError as e:
+        raise SetupError(f"cannot download {url}: {e}; check that the registry is reachable") from e
+
+
+def setup_photometry():
+    """Fetches the goniodiagram files; a failure is reported and the rest goes on."""
+    if marker_ok(PHOTOMETRY):
+        return
+    PHOTOMETRY.mkdir(parents=True, exist_ok=True)
+    names = []
+    for spec in PHOTOMETRY_ARCHIVES:
+        try:
+            say(f"fetching goniodiagram files from {spec['what']}")
+            with tempfile.TemporaryDirectory(dir=PHOTOMETRY) as tmp:
+                archive = Path(tmp) / "archive.tar.gz"
+                download(spec["url"], archive)
+                verify(archive, spec["sha256"], spec["what"])
+                with tarfile.open(archive) as tf:
+                    for inner, name in spec["members"]:
+                        (PHOTOMETRY / name).write_bytes(tf.extractfile(tf.getmember(inner)).read())
+                        names.append(name)
+        except (SetupError, OSError, KeyError) as e:
+            say(f"warning: goniodiagram files from {spec['what']} unavailable: {e}")
+    if names:
+        write_marker(PHOTOMETRY, sorted(names))
+
+
+def setup_hdr():
+    """Fetches the HDR maps; a failure is reported and the rest goes on."""
+    if marker_ok(HDR):
+        return
+    spec = HDR_DEB
+    try:
+        say(f"fetching HDR maps from Debian package {spec['package']}={spec['version']} (31 MB)")
+        HDR.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory(dir=HDR) as tmp:
+            deb = apt_download(spec["package"], spec["version"], tmp)
+            verify(deb, spec["sha256"], f"{spec['package']}={spec['version']}")
+            members = [(f"{spec['folder']}/{m}", m) for m in spec["members"]]
+            names = deb_members(deb, lambda _root: members, HDR)
+        write_marker(HDR, names)
+    except (SetupError, OSError) as e:
+        say(f"warning: HDR maps unavailable: {e}")
+
+
 def main(argv):
-    what = set(argv) or {"embree", "meshes"}
-    unknown = what - {"embree", "meshes"}
+    steps = {"embree", "meshes", "photometry", "hdr"}
+    what = set(argv) or steps
+    unknown = what - steps
     if unknown:
-        say(f"unknown step(s) {sorted(unknown)}; steps are: embree meshes")
+        say(f"unknown step(s) {sorted(unknown)}; steps are: {' '.join(sorted(steps))}")
         return 2
     status = 0
     if "embree" in what:
@@ -259,6 +357,10 @@ def main(argv):
             status = 1
     if "meshes" in what:
         setup_meshes()
+    if "photometry" in what:
+        setup_photometry()
+    if "hdr" in what:
+        setup_hdr()
     return status
 
 

@@ -9,8 +9,8 @@
 
 use coherent::light::photometry::{PhotometricTable, PhotometricType};
 use coherent::light::{
-    Circular, Direct, GonioLookup, Goniodiagram, Light, Linear, Omni, Parallel, Rectangular, Spot,
-    SpotFalloff, shadow_rays,
+    Circular, Direct, Environment, GonioLookup, Goniodiagram, Light, Linear, Omni, Parallel,
+    Rectangular, Spot, SpotFalloff, shadow_rays,
 };
 use coherent::simd::{Backend, Kernel, Lanes, SimdF32, SimdMask, Vec3s};
 use glam::Vec3;
@@ -92,7 +92,25 @@ pub fn lights() -> Vec<Light> {
         gonio(PhotometricType::C, GonioLookup::Search),
         gonio(PhotometricType::C, GonioLookup::Uniform),
         gonio(PhotometricType::B, GonioLookup::Search),
+        Light::Environment(environment()),
     ]
+}
+
+/// A small sky with a sun, up +z.
+fn environment() -> Environment {
+    let (w, h) = (24, 12);
+    let mut t = Vec::new();
+    for j in 0..h {
+        for i in 0..w {
+            let sun = if i == 5 && j == 3 { 200.0 } else { 0.0 };
+            t.push([
+                0.2 + sun,
+                0.3 + 0.01 * i as f32 + sun,
+                0.5 - 0.02 * j as f32 + sun,
+            ]);
+        }
+    }
+    Environment::new("sky", w, h, &t, 1.0, Vec3::Z, Vec3::X, 8).unwrap()
 }
 
 /// A goniodiagram light from a smooth made-up table with quadrant symmetry (type C) or
@@ -285,6 +303,71 @@ fn every_light_on_every_backend_equals_scalar() {
             assert!(
                 mask_diffs <= 2,
                 "{} on {}: {mask_diffs} mask differences",
+                light.kind(),
+                b.name()
+            );
+        }
+    }
+}
+
+#[derive(Clone)]
+struct Seen<'a> {
+    light: &'a Light,
+    dirs: &'a [Vec3],
+}
+
+impl Kernel for Seen<'_> {
+    type Output = Vec<[f32; 3]>;
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) -> Vec<[f32; 3]> {
+        let mut out = Vec::new();
+        for base in (0..self.dirs.len()).step_by(L::N) {
+            let d = Vec3s::from_fn(l, |i| self.dirs[(base + i).min(self.dirs.len() - 1)]);
+            let r = self.light.radiance_seen(l, &d);
+            for i in 0..L::N.min(self.dirs.len() - base) {
+                out.push(r.lane(i));
+            }
+        }
+        out
+    }
+}
+
+#[test]
+fn what_rays_see_of_the_lights_is_the_same_on_every_backend() {
+    let inp = inputs(11, 301);
+    let dirs: Vec<Vec3> = inp
+        .n
+        .iter()
+        .zip(&inp.p)
+        .map(|(n, p)| (*n + *p * 0.3).normalize())
+        .collect();
+    for light in lights() {
+        let want = Backend::Scalar
+            .run(Seen {
+                light: &light,
+                dirs: &dirs,
+            })
+            .unwrap();
+        if light.kind() != coherent::light::LightKind::Environment {
+            assert!(want.iter().all(|c| *c == [0.0; 3]), "{}", light.kind());
+        }
+        for b in Backend::ALL {
+            if let Some(why) = b.unavailable_reason() {
+                eprintln!("skipping {}: {why}", b.name());
+                continue;
+            }
+            let got = b
+                .run(Seen {
+                    light: &light,
+                    dirs: &dirs,
+                })
+                .unwrap();
+            // Nearest texel: directions on a texel border may pick the neighbour when
+            // the approximate angles round differently; at most a few.
+            let differ = got.iter().zip(&want).filter(|(g, w)| g != w).count();
+            assert!(
+                differ <= 2,
+                "{} on {}: {differ} directions differ",
                 light.kind(),
                 b.name()
             );

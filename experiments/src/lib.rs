@@ -25,6 +25,8 @@ pub mod aa;
 pub mod accel;
 pub mod kernels;
 pub mod table1;
+pub mod table2;
+pub mod table4;
 
 /// Every experiment, in the order `reproduce` runs them and the README lists them. The
 /// names are the results contract (`--only` takes them).
@@ -32,13 +34,7 @@ pub const EXPERIMENTS: &[Experiment] = &[
     kernels::EXPERIMENT,
     accel::EXPERIMENT,
     table1::EXPERIMENT,
-    Experiment::planned(
-        "table2",
-        "light source evaluation per light type and backend",
-        "Table 2 (section 5)",
-        &["table2_lights.csv"],
-        None,
-    ),
+    table2::EXPERIMENT,
     Experiment::planned(
         "table3",
         "rendering the test scenes per backend and accel",
@@ -46,13 +42,7 @@ pub const EXPERIMENTS: &[Experiment] = &[
         &["table3_scenes.csv"],
         None,
     ),
-    Experiment::planned(
-        "table4",
-        "the characteristics of the test scenes",
-        "Table 4 (section 7)",
-        &["table4_scenes.csv"],
-        None,
-    ),
+    table4::EXPERIMENT,
     Experiment::planned(
         "table5",
         "rendering with 1, 2, ... threads",

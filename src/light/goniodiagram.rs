@@ -123,6 +123,33 @@ impl Goniodiagram {
         })
     }
 
+    /// A goniodiagram light from an IES (`.ies`) or EULUMDAT (`.ldt`) file (by extension,
+    /// any case); see [`Goniodiagram::new`] for the other arguments.
+    pub fn load(
+        path: &std::path::Path,
+        position: Vec3,
+        up: Vec3,
+        x: Vec3,
+        colour: [f32; 3],
+        lookup: GonioLookup,
+    ) -> Result<Self, LightError> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        let table = match ext.as_deref() {
+            Some("ies") => super::ies::load(path)?,
+            Some("ldt") => super::ldt::load(path)?,
+            _ => {
+                return Err(LightError::File {
+                    path: path.to_path_buf(),
+                    problem: "not a goniodiagram file: expected the extension .ies (IES LM-63) or .ldt (EULUMDAT)".to_owned(),
+                });
+            }
+        };
+        Goniodiagram::new(position, up, x, &table, colour, lookup, path)
+    }
+
     /// The same light with another cell lookup.
     pub fn with_lookup(mut self, lookup: GonioLookup) -> Self {
         self.lookup = lookup;

@@ -17,7 +17,10 @@
 
 pub mod circular;
 pub mod direct;
+pub mod environment;
 pub mod goniodiagram;
+pub mod ies;
+pub mod ldt;
 pub mod linear;
 pub mod omni;
 pub mod parallel;
@@ -36,6 +39,7 @@ use thiserror::Error;
 
 pub use circular::Circular;
 pub use direct::Direct;
+pub use environment::Environment;
 pub use goniodiagram::{GonioLookup, Goniodiagram};
 pub use linear::Linear;
 pub use omni::Omni;
@@ -55,6 +59,7 @@ pub enum Light {
     Circular(Circular),
     Rectangular(Rectangular),
     Goniodiagram(Goniodiagram),
+    Environment(Environment),
 }
 
 /// The kinds of light, by the names used in scene files and results.
@@ -275,6 +280,7 @@ impl Light {
             Light::Circular(_) => LightKind::Circular,
             Light::Rectangular(_) => LightKind::Rectangular,
             Light::Goniodiagram(_) => LightKind::Goniodiagram,
+            Light::Environment(_) => LightKind::Environment,
         }
     }
 
@@ -289,6 +295,7 @@ impl Light {
             Light::Linear(x) => x.samples(),
             Light::Circular(x) => x.samples(),
             Light::Rectangular(x) => x.samples(),
+            Light::Environment(x) => x.samples(),
         }
     }
 
@@ -315,6 +322,7 @@ impl Light {
             Light::Circular(x) => x.sample(l, p, n, active, k, u),
             Light::Rectangular(x) => x.sample(l, p, n, active, k, u),
             Light::Goniodiagram(x) => x.sample(l, p, n, active),
+            Light::Environment(x) => x.sample(l, p, n, active, u),
         }
     }
 
@@ -322,8 +330,10 @@ impl Light {
     /// environment map's radiance, zero for the other kinds.
     #[inline(always)]
     pub fn radiance_seen<L: Lanes>(&self, l: L, dir: &Vec3s<L>) -> Rgbs<L> {
-        let _ = dir;
-        Rgbs::zero(l)
+        match self {
+            Light::Environment(x) => x.radiance(l, dir),
+            _ => Rgbs::zero(l),
+        }
     }
 }
 

@@ -153,7 +153,7 @@ impl PhotometricTable {
                 } else if first == 0.0 && last == 360.0 {
                     fold = Box::new(Some);
                     planes = self.planes.clone();
-                } else if first == 0.0 && last < 360.0 && self.planes.len() > 1 && last > 270.0 {
+                } else if first == 0.0 && last > 180.0 && last < 360.0 {
                     // Full circle without the closing plane: 360 repeats 0.
                     fold = Box::new(move |c| Some(if c >= 360.0 { 0.0 } else { c }));
                     planes = self.planes.clone();

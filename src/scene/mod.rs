@@ -5,6 +5,10 @@
 pub mod builtin;
 pub mod camera;
 pub mod error;
+pub mod file;
+#[cfg(test)]
+mod file_tests;
+pub mod gltf;
 pub mod motion;
 pub mod shaded;
 
@@ -45,7 +49,7 @@ pub struct RenderScene {
     pub depth: u32,
     pub spp: Option<u32>,
     pub accuracy: Option<f32>,
-    // TODO(film): `pub tonemap: crate::tonemap::Operator` once the film branch is merged.
+    pub tonemap: crate::tonemap::Operator,
     /// Radiance of rays that miss (plus any environment light).
     pub background: [f32; 3],
     /// Keyframed instance transforms (top level rebuilt per frame).
@@ -122,6 +126,13 @@ impl RenderScene {
                 source,
             })?;
         }
+        if self.lights.is_empty() && self.background.iter().all(|&v| v == 0.0) {
+            return Err(bad(
+                "lights",
+                "the scene has no light and a black background: the image would be black"
+                    .to_string(),
+            ));
+        }
         if self.instances.is_empty() {
             return Err(bad("instances", "the scene has no object".to_string()));
         }
@@ -175,10 +186,10 @@ impl RenderScene {
     }
 }
 
-/// Mesh file extensions [`load`] takes as a bare mesh.
+/// Mesh file extensions [`load`] takes as a bare mesh (besides `.gltf` and `.glb`).
 pub const MESH_EXTENSIONS: [&str; 3] = ["obj", "ply", "off"];
 
-/// A scene file (.toml), a built-in scene's name, or a bare mesh file (framed by a default
+/// A scene file (.toml, see [`file`]), a built-in scene's name, or a bare mesh file (framed by a default
 /// camera and light).
 pub fn load(spec: &str) -> Result<RenderScene, SceneError> {
     let path = Path::new(spec);
@@ -188,6 +199,8 @@ pub fn load(spec: &str) -> Result<RenderScene, SceneError> {
         .map(str::to_ascii_lowercase);
     let scene = match ext.as_deref() {
         Some(e) if MESH_EXTENSIONS.contains(&e) => builtin::bare_mesh(path)?,
+        Some("toml") => file::load_file(path)?,
+        Some("gltf" | "glb") => gltf::load_gltf(path)?,
         _ => match builtin::by_name(spec) {
             Some(s) => s,
             None => {

@@ -8,7 +8,9 @@ use coherent_accel::{Instance, Mesh};
 use glam::{Affine3A, Quat, Vec3};
 
 use super::materials::{glass, matte, mirror};
+use crate::light::{Light, Rectangular, rectangular};
 use crate::scene::{Camera, RenderScene, ShadedMesh};
+use crate::tonemap::Operator;
 
 /// The scene (36 + 1,280 triangles: room, box, sphere).
 pub fn cornell() -> RenderScene {
@@ -108,14 +110,25 @@ pub fn cornell() -> RenderScene {
             ),
         ),
     ];
-    // TODO(lights): one light under the ceiling (a rectangular area light at y = 1.98) once
-    // the lights branch is merged.
+    // A rectangular area light just under the ceiling, facing down (edge_u x edge_v = -y).
+    let light = Rectangular::new(
+        Vec3::new(-0.25, 1.98, -0.25),
+        Vec3::new(0.5, 0.0, 0.0),
+        Vec3::new(0.0, 0.0, 0.5),
+        [12.0; 3],
+        rectangular::DEFAULT_GRID,
+        1,
+        false,
+    )
+    .expect("a valid light");
     RenderScene {
         lights: Vec::new(),
         name: "cornell".to_string(),
         meshes: vec![room, tall_box, sphere],
         instances,
         materials,
+        lights: vec![Light::Rectangular(light)],
+        tonemap: Operator::default(),
         camera: Camera {
             position: Vec3::new(0.0, 1.0, 3.9),
             look_at: Vec3::new(0.0, 1.0, 0.0),

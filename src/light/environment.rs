@@ -1,0 +1,566 @@
+//! The environment light (section 5, Figure 5's HDR panorama): a latitude-longitude RGB
+//! radiance map, read from OpenEXR, around the scene. It is a light with a fixed number
+//! of samples per shading point, each drawn by importance from a 2D distribution over the
+//! map (a marginal distribution over rows and one conditional per row, texel weights =
+//! luminance times `sin(theta)`), found per lane by a fixed-length branch-free binary
+//! search over the cumulative tables. Rays that miss everything see the map
+//! ([`Environment::radiance`], nearest texel, the same piecewise-constant map the sampling
+//! assumes).
+//!
+//! Map layout: column `i` of `w` covers azimuth `phi` in `[2 pi i / w, 2 pi (i + 1) / w)`,
+//! row `j` of `h` covers `theta` (from the up axis) in `[pi j / h, pi (j + 1) / h)`; the
+//! direction of `(theta, phi)` is `sin(theta) (cos(phi) x + sin(phi) y) + cos(theta) up`,
+//! with `x` the light's forward axis (`phi = 0`).
+
+// Index loops in per-packet code (see `tabulated`).
+#![allow(clippy::needless_range_loop)]
+
+use std::path::Path;
+use std::sync::Arc;
+
+use coherent_simd::{Lanes, Rgbs, SimdF32, SimdI32, SimdMask, Vec3s};
+use glam::Vec3;
+
+use super::sincos::sincos;
+use super::{LightError, LightSample, check_dir, finish};
+use crate::approx::{acos, atan2};
+
+/// Default samples per shading point.
+pub const DEFAULT_SAMPLES: u32 = 16;
+
+/// The map and its sampling tables (shared by clones).
+#[derive(Debug, PartialEq)]
+struct Map {
+    width: usize,
+    height: usize,
+    /// Radiance, one plane per channel (`rgb[c * w * h + j * w + i]`).
+    rgb: Vec<f32>,
+    /// Marginal CDF over rows: `h + 1` values, 0 to 1.
+    marginal: Vec<f32>,
+    /// Conditional CDFs per row: `h` runs of `w + 1` values, 0 to 1.
+    conditional: Vec<f32>,
+    /// Density per texel over the unit square of map coordinates.
+    pdf: Vec<f32>,
+    /// Step sizes of the fixed-length searches over rows and columns.
+    row_halves: Vec<i32>,
+    col_halves: Vec<i32>,
+}
+
+/// An HDR latitude-longitude map as a light.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Environment {
+    map: Arc<Map>,
+    /// The map's x (phi = 0), y (phi = pi/2) and up axes in world space.
+    axes: [Vec3; 3],
+    scale: f32,
+    samples: u32,
+    /// Negative channels set to zero when loaded.
+    clamped: usize,
+}
+
+/// The search step sizes for `n` cells.
+fn halves(n: usize) -> Vec<i32> {
+    let mut v = Vec::new();
+    let mut n = n;
+    while n > 1 {
+        let half = n / 2;
+        v.push(half as i32);
+        n -= half;
+    }
+    v
+}
+
+/// Turns weights into a CDF (`len + 1` values from 0 to 1); all-zero weights give a
+/// uniform CDF. Returns the sum.
+fn cdf(weights: &[f64], out: &mut Vec<f32>) -> f64 {
+    let sum: f64 = weights.iter().sum();
+    let mut acc = 0.0f64;
+    out.push(0.0);
+    for (k, &w) in weights.iter().enumerate() {
+        acc += w;
+        let v = if sum > 0.0 {
+            acc / sum
+        } else {
+            (k + 1) as f64 / weights.len() as f64
+        };
+        out.push(v as f32);
+    }
+    *out.last_mut().unwrap() = 1.0;
+    sum
+}
+
+impl Environment {
+    /// A map of `width * height` RGB texels (rows from the up pole down), radiance scaled
+    /// by `scale`, oriented by `up` and `forward` (made orthogonal to `up`), with `samples`
+    /// samples per shading point. `name` is used in errors.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        name: &str,
+        width: usize,
+        height: usize,
+        texels: &[[f32; 3]],
+        scale: f32,
+        up: Vec3,
+        forward: Vec3,
+        samples: u32,
+    ) -> Result<Self, LightError> {
+        let file = |problem: String| LightError::File {
+            path: name.into(),
+            problem,
+        };
+        if width == 0 || height == 0 || texels.len() != width * height {
+            return Err(file(format!(
+                "{width} x {height} map with {} texels",
+                texels.len()
+            )));
+        }
+        if width * height >= 1 << 24 {
+            return Err(file(format!("{width} x {height} map: at most 2^24 texels")));
+        }
+        if let Some((k, t)) = texels
+            .iter()
+            .enumerate()
+            .find(|(_, t)| !t.iter().all(|c| c.is_finite() && *c >= 0.0))
+        {
+            return Err(file(format!(
+                "texel ({}, {}) is {t:?}: radiance must be finite and non-negative",
+                k % width,
+                k / width
+            )));
+        }
+        if !(scale.is_finite() && scale >= 0.0) {
+            return Err(LightError::bad(
+                "environment",
+                "scale",
+                scale,
+                "not finite and non-negative",
+            ));
+        }
+        if samples == 0 {
+            return Err(LightError::bad(
+                "environment",
+                "samples",
+                samples,
+                "not at least 1",
+            ));
+        }
+        let ez = check_dir("environment", "up", up)?;
+        let ex =
+            check_dir("environment", "forward", forward - ez * forward.dot(ez)).map_err(|_| {
+                LightError::bad("environment", "forward", forward, "parallel to up or zero")
+            })?;
+        let ey = ez.cross(ex);
+        let (w, h) = (width, height);
+        let mut rgb = vec![0.0f32; 3 * w * h];
+        for (k, t) in texels.iter().enumerate() {
+            for c in 0..3 {
+                rgb[c * w * h + k] = t[c] * scale;
+            }
+        }
+        // Weights: luminance times sin(theta) at the row's centre (the solid angle of a
+        // texel), so that bright and large texels are drawn more often.
+        let mut conditional = Vec::with_capacity(h * (w + 1));
+        let mut row_sums = Vec::with_capacity(h);
+        let mut weights = vec![0.0f64; w];
+        for j in 0..h {
+            let sin = ((j as f64 + 0.5) * std::f64::consts::PI / h as f64).sin();
+            for i in 0..w {
+                let t = texels[j * w + i];
+                let lum = 0.2126 * t[0] as f64 + 0.7152 * t[1] as f64 + 0.0722 * t[2] as f64;
+                weights[i] = lum * sin;
+            }
+            row_sums.push(cdf(&weights, &mut conditional));
+        }
+        let mut marginal = Vec::with_capacity(h + 1);
+        cdf(&row_sums, &mut marginal);
+        // Density over the unit square: the probability of the texel (product of its row's
+        // and its column's CDF steps, as sampled) times w h.
+        let mut pdf = vec![0.0f32; w * h];
+        for j in 0..h {
+            let pr = (marginal[j + 1] - marginal[j]) as f64;
+            for i in 0..w {
+                let pc = (conditional[j * (w + 1) + i + 1] - conditional[j * (w + 1) + i]) as f64;
+                pdf[j * w + i] = (pr * pc * (w * h) as f64) as f32;
+            }
+        }
+        Ok(Environment {
+            map: Arc::new(Map {
+                width: w,
+                height: h,
+                rgb,
+                marginal,
+                conditional,
+                pdf,
+                row_halves: halves(h),
+                col_halves: halves(w),
+            }),
+            axes: [ex, ey, ez],
+            scale,
+            samples,
+            clamped: 0,
+        })
+    }
+
+    /// A constant map of radiance `c` (for tests and a uniform sky).
+    pub fn constant(
+        c: [f32; 3],
+        up: Vec3,
+        forward: Vec3,
+        samples: u32,
+    ) -> Result<Self, LightError> {
+        Environment::new("constant", 8, 4, &[c; 32], 1.0, up, forward, samples)
+    }
+
+    /// Loads an OpenEXR latitude-longitude map (its first RGB layer; alpha ignored).
+    /// Negative channels, which lossy EXR compression (DWAA/DWAB, B44) leaves around dark
+    /// texels (Blender's studio-light maps hold a few of -1e-4 or so), are set to zero and
+    /// counted ([`Environment::clamped`]); NaN or infinite texels are errors.
+    pub fn load(
+        path: &Path,
+        scale: f32,
+        up: Vec3,
+        forward: Vec3,
+        samples: u32,
+    ) -> Result<Self, LightError> {
+        let (width, height, mut texels) = read_exr(path)?;
+        let mut clamped = 0;
+        for t in &mut texels {
+            for c in t.iter_mut() {
+                if *c < 0.0 {
+                    *c = 0.0;
+                    clamped += 1;
+                }
+            }
+        }
+        let mut env = Environment::new(
+            &path.display().to_string(),
+            width,
+            height,
+            &texels,
+            scale,
+            up,
+            forward,
+            samples,
+        )?;
+        env.clamped = clamped;
+        Ok(env)
+    }
+
+    /// How many negative channels [`Environment::load`] set to zero.
+    pub fn clamped(&self) -> usize {
+        self.clamped
+    }
+
+    pub fn samples(&self) -> u32 {
+        self.samples
+    }
+
+    pub fn size(&self) -> (usize, usize) {
+        (self.map.width, self.map.height)
+    }
+
+    pub fn scale(&self) -> f32 {
+        self.scale
+    }
+
+    /// The same map with another sample count (at least 1).
+    pub fn with_samples(mut self, samples: u32) -> Self {
+        self.samples = samples.max(1);
+        self
+    }
+
+    /// The largest `j` in `0..halves' cells` with `cdf[offset + j] <= u`, per lane.
+    #[inline(always)]
+    fn search<L: Lanes>(l: L, cdf: &[f32], offset: L::I32s, halves: &[i32], u: L::F32s) -> L::I32s {
+        let mut base = l.splat_i32(0);
+        for &half in halves {
+            let probe = base + l.splat_i32(half);
+            let hit = l.gather(cdf, offset + probe).le(u);
+            base = hit.select_i32(probe, base);
+        }
+        base
+    }
+
+    /// The texel index (`j * w + i`) of map coordinates per lane, clamped to the map.
+    #[inline(always)]
+    fn texel<L: Lanes>(&self, l: L, dir: &Vec3s<L>) -> L::I32s {
+        let m = &*self.map;
+        let x = Vec3s::splat(l, self.axes[0]).dot(*dir);
+        let y = Vec3s::splat(l, self.axes[1]).dot(*dir);
+        let z = Vec3s::splat(l, self.axes[2]).dot(*dir);
+        let theta = acos(l, z);
+        let phi = atan2(l, y, x);
+        let phi = phi
+            .lt(l.splat(0.0))
+            .select(phi + std::f32::consts::TAU, phi);
+        let i = (phi * (m.width as f32 / std::f32::consts::TAU))
+            .floor()
+            .clamp(l.splat(0.0), l.splat((m.width - 1) as f32));
+        let j = (theta * (m.height as f32 / std::f32::consts::PI))
+            .floor()
+            .clamp(l.splat(0.0), l.splat((m.height - 1) as f32));
+        (j * m.width as f32 + i).to_i32()
+    }
+
+    /// The radiance of the map towards unit directions `dir` (nearest texel).
+    #[inline(always)]
+    pub fn radiance<L: Lanes>(&self, l: L, dir: &Vec3s<L>) -> Rgbs<L> {
+        let m = &*self.map;
+        let t = self.texel(l, dir);
+        let n = m.width * m.height;
+        Rgbs::new(
+            l.gather(&m.rgb[..n], t),
+            l.gather(&m.rgb[n..2 * n], t),
+            l.gather(&m.rgb[2 * n..], t),
+        )
+    }
+
+    /// The sampling density over solid angle towards `dir` (scalar, for tests).
+    pub fn pdf1(&self, dir: Vec3) -> f32 {
+        let l = coherent_simd::scalar::Scalar;
+        let m = &*self.map;
+        let t = self.texel(l, &Vec3s::splat(l, dir)).lane(0) as usize;
+        let z = dir.dot(self.axes[2]).clamp(-1.0, 1.0);
+        let sin_dir = (1.0 - z * z).sqrt().max(f32::MIN_POSITIVE);
+        m.pdf[t] / (2.0 * std::f32::consts::PI * std::f32::consts::PI * sin_dir)
+    }
+
+    /// One importance-drawn direction per lane from `u`, weighted for [`Self::samples`]
+    /// samples.
+    #[inline(always)]
+    pub fn sample<L: Lanes>(
+        &self,
+        l: L,
+        _p: &Vec3s<L>,
+        n: &Vec3s<L>,
+        active: L::Mask,
+        u: [L::F32s; 2],
+    ) -> LightSample<L> {
+        let m = &*self.map;
+        let (w, h) = (m.width, m.height);
+        let zero = l.splat(0.0);
+        let below_one = l.splat(1.0f32.next_down());
+        let (u0, u1) = (u[0].clamp(zero, below_one), u[1].clamp(zero, below_one));
+        // Row from the marginal CDF, then the column from that row's conditional CDF; the
+        // position inside the texel is the remainder of the number, rescaled.
+        let j = Self::search(l, &m.marginal, l.splat_i32(0), &m.row_halves, u1);
+        let (r0, r1) = l.gather2(&m.marginal, j);
+        let fv = ((u1 - r0) / (r1 - r0)).clamp(zero, below_one);
+        let row = j * l.splat_i32(w as i32 + 1);
+        let i = Self::search(l, &m.conditional, row, &m.col_halves, u0);
+        let (c0, c1) = l.gather2(&m.conditional, row + i);
+        let fu = ((u0 - c0) / (c1 - c0)).clamp(zero, below_one);
+        let v = (j.to_f32() + fv) * (1.0 / h as f32);
+        let uu = (i.to_f32() + fu) * (1.0 / w as f32);
+        let theta = v * std::f32::consts::PI;
+        // phi - pi in [-pi, pi): sin and cos of phi are the negated ones.
+        let (sp, cp) = sincos(l, uu * std::f32::consts::TAU - std::f32::consts::PI);
+        let (st, ct) = sincos(l, theta);
+        let (sp, cp) = (-sp, -cp);
+        let ax = |k: usize| Vec3s::splat(l, self.axes[k]);
+        let wi = ax(0).mul_add(st * cp, ax(1).mul_add(st * sp, ax(2) * ct));
+        let texel = j * l.splat_i32(w as i32) + i;
+        let pdf = l.gather(&m.pdf, texel);
+        // li = L / (pdf_omega * samples), pdf_omega = pdf / (2 pi^2 sin(theta)).
+        let weight =
+            st * (2.0 * std::f32::consts::PI * std::f32::consts::PI / self.samples as f32) / pdf;
+        let active = active & n.dot(wi).gt(zero) & pdf.gt(zero) & st.gt(zero);
+        let nn = w * h;
+        let li = Rgbs::new(
+            l.gather(&m.rgb[..nn], texel) * weight,
+            l.gather(&m.rgb[nn..2 * nn], texel) * weight,
+            l.gather(&m.rgb[2 * nn..], texel) * weight,
+        );
+        finish(l, n, active, wi, l.splat(f32::INFINITY), li)
+    }
+}
+
+/// Reads the first RGB layer of an OpenEXR file. DWAA/DWAB files are read too (the `exr`
+/// crate decodes them since 1.74).
+pub fn read_exr(path: &Path) -> Result<(usize, usize, Vec<[f32; 3]>), LightError> {
+    use exr::prelude::*;
+    let file = |problem: String| LightError::File {
+        path: path.to_path_buf(),
+        problem,
+    };
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |size: Vec2<usize>, _: &RgbaChannels| {
+                (size.width(), size.height(), vec![[0.0f32; 3]; size.area()])
+            },
+            |(w, _, texels): &mut (usize, usize, Vec<[f32; 3]>),
+             at: Vec2<usize>,
+             (r, g, b, _a): (f32, f32, f32, f32)| {
+                texels[at.y() * *w + at.x()] = [r, g, b];
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| match e {
+            exr::error::Error::Io(io) => LightError::Io {
+                path: path.to_path_buf(),
+                source: io,
+            },
+            other => file(format!("not a usable OpenEXR RGB map: {other}")),
+        })?;
+    let (width, height, texels) = image.layer_data.channel_data.pixels;
+    Ok((width, height, texels))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::light::Light;
+    use crate::light::test_util::irradiance1;
+
+    /// A map with a bright spot and a gradient.
+    fn varied() -> Environment {
+        let (w, h) = (32, 16);
+        let mut t = Vec::new();
+        for j in 0..h {
+            for i in 0..w {
+                let spot = if (10..13).contains(&i) && (3..5).contains(&j) {
+                    50.0
+                } else {
+                    0.0
+                };
+                t.push([0.1 + i as f32 * 0.01 + spot, 0.2 + spot, 0.05 * j as f32]);
+            }
+        }
+        Environment::new("varied", w, h, &t, 1.0, Vec3::Z, Vec3::X, 64).unwrap()
+    }
+
+    #[test]
+    fn the_sampling_pdf_integrates_to_one_over_the_sphere() {
+        for env in [
+            varied(),
+            Environment::constant([1.0; 3], Vec3::Y, Vec3::X, 4).unwrap(),
+        ] {
+            // Midpoint rule over (theta, phi), fine enough to resolve the texels.
+            let (nt, np) = (400, 800);
+            let mut sum = 0.0f64;
+            for a in 0..nt {
+                let theta = (a as f64 + 0.5) * std::f64::consts::PI / nt as f64;
+                for b in 0..np {
+                    let phi = (b as f64 + 0.5) * std::f64::consts::TAU / np as f64;
+                    let local = glam::DVec3::new(
+                        theta.sin() * phi.cos(),
+                        theta.sin() * phi.sin(),
+                        theta.cos(),
+                    );
+                    let d = (env.axes[0].as_dvec3() * local.x
+                        + env.axes[1].as_dvec3() * local.y
+                        + env.axes[2].as_dvec3() * local.z)
+                        .as_vec3();
+                    let dw = theta.sin()
+                        * (std::f64::consts::PI / nt as f64)
+                        * (std::f64::consts::TAU / np as f64);
+                    sum += env.pdf1(d) as f64 * dw;
+                }
+            }
+            assert!((sum - 1.0).abs() < 2e-3, "integral {sum}");
+        }
+    }
+
+    #[test]
+    fn a_constant_map_gives_constant_irradiance_pi_l() {
+        let env = Light::Environment(
+            Environment::constant([0.5, 1.0, 2.0], Vec3::Z, Vec3::X, 4096).unwrap(),
+        );
+        for n in [
+            Vec3::Z,
+            Vec3::X,
+            Vec3::new(0.3, -0.5, -0.8).normalize(),
+            -Vec3::Z,
+        ] {
+            let e = irradiance1(&env, Vec3::ZERO, n);
+            for c in 0..3 {
+                let want = std::f32::consts::PI * [0.5, 1.0, 2.0][c];
+                assert!((e[c] - want).abs() < 0.03 * want, "normal {n}: {e:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn samples_are_drawn_where_the_map_is_bright_and_see_what_radiance_sees() {
+        let env = varied();
+        let l = coherent_simd::scalar::Scalar;
+        let mut bright = 0;
+        for k in 0..1000 {
+            let u = [
+                ((k as f32 + 0.5) * 0.618_034).fract(),
+                ((k as f32 + 0.5) * 0.754_877_7).fract(),
+            ];
+            let s = env.sample(
+                l,
+                &Vec3s::splat(l, Vec3::ZERO),
+                &Vec3s::splat(l, Vec3::Z),
+                l.splat_mask(true),
+                [u[0], u[1]],
+            );
+            let d = s.wi.lane(0);
+            let seen = env.radiance(l, &Vec3s::splat(l, d)).lane(0);
+            if seen[1] > 10.0 {
+                bright += 1;
+            }
+            if s.active.lane(0) {
+                // li = L / (pdf * samples) for the texel the direction lies in.
+                let want = seen[1] / (env.pdf1(d) * 64.0);
+                assert!(
+                    (s.li.lane(0)[1] - want).abs() <= 2e-2 * want,
+                    "{k}: {:?} vs {want}",
+                    s.li.lane(0)
+                );
+            }
+        }
+        // The spot is 6 of 512 texels but holds most of the weight.
+        assert!(bright > 500, "{bright} of 1000 samples in the bright spot");
+    }
+
+    #[test]
+    fn bad_maps_are_errors() {
+        let e = Environment::new(
+            "m.exr",
+            2,
+            1,
+            &[[1.0; 3], [f32::NAN, 0.0, 0.0]],
+            1.0,
+            Vec3::Z,
+            Vec3::X,
+            4,
+        )
+        .unwrap_err();
+        assert!(
+            e.to_string().contains("m.exr") && e.to_string().contains("texel (1, 0)"),
+            "{e}"
+        );
+        let e = Environment::load(Path::new("/nonexistent/map.exr"), 1.0, Vec3::Z, Vec3::X, 4)
+            .unwrap_err();
+        assert!(e.to_string().contains("/nonexistent/map.exr"), "{e}");
+    }
+
+    #[test]
+    fn an_exr_file_round_trips_and_one_without_rgb_is_an_error() {
+        let dir = std::env::temp_dir().join(format!("coherent-env-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("sky.exr");
+        exr::prelude::write_rgb_file(&path, 8, 4, |x, y| (x as f32, y as f32, 1.0f32)).unwrap();
+        let env = Environment::load(&path, 2.0, Vec3::Z, Vec3::X, 8).unwrap();
+        assert_eq!(env.size(), (8, 4));
+        // A luminance-only image.
+        use exr::prelude::*;
+        let gray = dir.join("gray.exr");
+        let channel = AnyChannel::new("Y", FlatSamples::F32(vec![1.0; 8 * 4]));
+        let image =
+            Image::from_channels((8, 4), AnyChannels::sort(SmallVec::from_vec(vec![channel])));
+        image.write().to_file(&gray).unwrap();
+        let e = Environment::load(&gray, 1.0, Vec3::Z, Vec3::X, 8)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("gray.exr"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}

@@ -1,0 +1,806 @@
+//! The TOML scene file (paper section 7: a scene is meshes placed by transforms, materials,
+//! lights, a camera and the rendering settings): parsed through `serde` with unknown keys
+//! rejected, paths relative to the scene file, and every error naming the file, the line
+//! and the problem.
+//!
+//! ```toml
+//! resolution = [1024, 768]        # default 1024 x 768
+//! depth = 2                       # reflection/refraction depth, 0 = camera rays only
+//! spp = 4                         # or: accuracy = 0.01 (adaptive)
+//! tonemap = "tumblin"             # tumblin | reinhard | ward
+//! background = [0.0, 0.0, 0.0]
+//!
+//! [camera]
+//! position = [0, 1, 4]
+//! look_at = [0, 1, 0]
+//! up = [0, 1, 0]                  # default +y
+//! vfov_deg = 40                   # default 45
+//!
+//! [materials.red]
+//! type = "phong"                  # phong | mirror | glass | textured | bdf
+//! diffuse = [0.7, 0.1, 0.1]
+//!
+//! [[objects]]
+//! mesh = "bunny.obj"              # .obj/.ply/.off, or a .gltf/.glb placed whole (its nodes,
+//!                                 # materials and lights); or: shape = "box" | "sphere" | "quad"
+//! material = "red"                # default: the file's own materials
+//! translate = [0, 0, 0]
+//! rotate_deg = [0, 90, 0]         # about x, then y, then z
+//! scale = [1, 1, 1]
+//! keyframes = [{ time = 1.0, translate = [0, 1, 0] }]   # optional motion
+//!
+//! [[lights]]
+//! type = "omni"                   # omni | spot | parallel | direct | linear | circular |
+//!                                 # rectangular | goniodiagram (file = "lamp.ies" or ".ldt")
+//!                                 # | environment (file = "sky.exr")
+//! position = [0, 3, 0]
+//! intensity = [10, 10, 10]
+//! ```
+
+use std::collections::{BTreeMap, HashMap};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use coherent_accel::shapes::{cuboid, icosphere};
+use coherent_accel::{Instance, Mesh};
+use glam::{EulerRot, Quat, Vec3};
+use serde::Deserialize;
+use toml::Spanned;
+
+use super::{Camera, InstanceMotion, Keyframe, RenderScene, SceneError, ShadedMesh};
+use crate::light::{self, Light, SpotFalloff};
+use crate::material::Material;
+use crate::texture::{InverseToneMap, Wrap};
+use crate::tonemap::Operator;
+
+type V3 = [f32; 3];
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneSpec {
+    name: Option<String>,
+    resolution: Option<Spanned<[u32; 2]>>,
+    depth: Option<u32>,
+    spp: Option<u32>,
+    accuracy: Option<f32>,
+    tonemap: Option<Spanned<String>>,
+    #[serde(default)]
+    background: V3,
+    camera: Spanned<CameraSpec>,
+    #[serde(default)]
+    materials: BTreeMap<String, Spanned<MaterialSpec>>,
+    #[serde(default)]
+    objects: Vec<Spanned<ObjectSpec>>,
+    #[serde(default)]
+    lights: Vec<Spanned<LightSpec>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraSpec {
+    position: V3,
+    look_at: V3,
+    #[serde(default = "y_up")]
+    up: V3,
+    #[serde(default = "default_vfov")]
+    vfov_deg: f32,
+}
+
+fn y_up() -> V3 {
+    [0.0, 1.0, 0.0]
+}
+fn default_vfov() -> f32 {
+    45.0
+}
+fn ones() -> V3 {
+    [1.0; 3]
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+enum MaterialSpec {
+    Phong {
+        diffuse: V3,
+        #[serde(default)]
+        specular: V3,
+        #[serde(default)]
+        exponent: f32,
+        #[serde(default)]
+        ambient: V3,
+        #[serde(default)]
+        reflectance: V3,
+    },
+    Mirror {
+        #[serde(default = "ones")]
+        reflectance: V3,
+        #[serde(default)]
+        diffuse: V3,
+    },
+    Glass {
+        #[serde(default = "default_ior")]
+        ior: f32,
+        #[serde(default = "ones")]
+        tint: V3,
+    },
+    Textured {
+        texture: String,
+        #[serde(default = "ones")]
+        diffuse: V3,
+        #[serde(default)]
+        specular: V3,
+        #[serde(default)]
+        exponent: f32,
+        #[serde(default)]
+        ambient: V3,
+        #[serde(default)]
+        clamp: bool,
+    },
+    Bdf {
+        file: String,
+        texture: Option<String>,
+    },
+}
+
+fn default_ior() -> f32 {
+    1.5
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum Shape {
+    Box,
+    Sphere,
+    Quad,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObjectSpec {
+    mesh: Option<Spanned<String>>,
+    shape: Option<Shape>,
+    material: Option<Spanned<String>>,
+    #[serde(default)]
+    translate: V3,
+    #[serde(default)]
+    rotate_deg: V3,
+    #[serde(default = "ones")]
+    scale: V3,
+    #[serde(default)]
+    keyframes: Vec<KeyframeSpec>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct KeyframeSpec {
+    time: f32,
+    translate: Option<V3>,
+    rotate_deg: Option<V3>,
+    scale: Option<V3>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+enum LightSpec {
+    Omni {
+        position: V3,
+        intensity: V3,
+    },
+    Spot {
+        position: V3,
+        axis: V3,
+        intensity: V3,
+        inner_deg: f32,
+        outer_deg: f32,
+        #[serde(default)]
+        exact: bool,
+    },
+    Parallel {
+        direction: V3,
+        irradiance: V3,
+    },
+    Direct {
+        position: V3,
+        axis: V3,
+        intensity: V3,
+    },
+    Linear {
+        a: V3,
+        b: V3,
+        intensity: V3,
+        #[serde(default = "linear_points")]
+        points: u32,
+    },
+    Circular {
+        center: V3,
+        normal: V3,
+        radius: f32,
+        radiance: V3,
+        #[serde(default = "circular_grid")]
+        grid: [u32; 2],
+    },
+    Rectangular {
+        corner: V3,
+        edge_u: V3,
+        edge_v: V3,
+        radiance: V3,
+        #[serde(default = "rectangular_grid")]
+        grid: [u32; 2],
+    },
+    Goniodiagram {
+        file: String,
+        position: V3,
+        #[serde(default = "y_up")]
+        up: V3,
+        #[serde(default = "x_axis")]
+        x: V3,
+        #[serde(default = "ones")]
+        colour: V3,
+        #[serde(default)]
+        uniform: bool,
+    },
+    Environment {
+        file: String,
+        #[serde(default = "unit")]
+        scale: f32,
+        #[serde(default = "y_up")]
+        up: V3,
+        #[serde(default = "minus_z")]
+        forward: V3,
+        #[serde(default = "environment_samples")]
+        samples: u32,
+    },
+}
+
+fn x_axis() -> V3 {
+    [1.0, 0.0, 0.0]
+}
+fn unit() -> f32 {
+    1.0
+}
+fn minus_z() -> V3 {
+    [0.0, 0.0, -1.0]
+}
+fn environment_samples() -> u32 {
+    light::environment::DEFAULT_SAMPLES
+}
+
+fn linear_points() -> u32 {
+    light::linear::DEFAULT_POINTS
+}
+fn circular_grid() -> [u32; 2] {
+    let (a, b) = light::circular::DEFAULT_GRID;
+    [a, b]
+}
+fn rectangular_grid() -> [u32; 2] {
+    let (a, b) = light::rectangular::DEFAULT_GRID;
+    [a, b]
+}
+
+/// The scene file being read: its path, text and folder, for messages and relative paths.
+struct Source<'a> {
+    path: &'a Path,
+    text: &'a str,
+    dir: PathBuf,
+}
+
+impl Source<'_> {
+    /// 1-based line and column of byte `offset`.
+    fn line_col(&self, offset: usize) -> (usize, usize) {
+        let before = &self.text[..offset.min(self.text.len())];
+        let line = before.matches('\n').count() + 1;
+        let col = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+        (line, col)
+    }
+
+    /// An error at `span` about `field`.
+    fn at(&self, span: Range<usize>, field: &str, problem: impl std::fmt::Display) -> SceneError {
+        let (line, column) = self.line_col(span.start);
+        SceneError::Syntax {
+            path: self.path.to_path_buf(),
+            line,
+            column,
+            problem: format!("{field}: {problem}"),
+        }
+    }
+
+    fn resolve(&self, p: &str) -> PathBuf {
+        self.dir.join(p)
+    }
+}
+
+/// Reads and checks a scene file.
+pub fn load_file(path: &Path) -> Result<RenderScene, SceneError> {
+    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse(path, &text)
+}
+
+/// Parses scene-file text as if read from `path` (relative paths resolve from its folder).
+pub fn parse(path: &Path, text: &str) -> Result<RenderScene, SceneError> {
+    let src = Source {
+        path,
+        text,
+        dir: path.parent().unwrap_or(Path::new(".")).to_path_buf(),
+    };
+    let spec: SceneSpec = toml::from_str(text).map_err(|e| {
+        let (line, column) = e.span().map_or((0, 0), |s| src.line_col(s.start));
+        SceneError::Syntax {
+            path: path.to_path_buf(),
+            line,
+            column,
+            problem: e.message().trim().to_string(),
+        }
+    })?;
+    build(&src, spec)
+}
+
+fn build(src: &Source, spec: SceneSpec) -> Result<RenderScene, SceneError> {
+    let name = spec.name.clone().unwrap_or_else(|| {
+        src.path
+            .file_stem()
+            .map_or_else(|| "scene".to_string(), |s| s.to_string_lossy().into_owned())
+    });
+    let (width, height) = match &spec.resolution {
+        None => super::DEFAULT_RESOLUTION,
+        Some(r) => {
+            let [w, h] = *r.get_ref();
+            let pixels = u64::from(w) * u64::from(h);
+            if w == 0
+                || h == 0
+                || w > super::MAX_SIDE
+                || h > super::MAX_SIDE
+                || pixels > super::MAX_PIXELS
+            {
+                return Err(src.at(
+                    r.span(),
+                    "resolution",
+                    format!(
+                        "{w}x{h} is not usable (each side 1..={}, at most {} pixels)",
+                        super::MAX_SIDE,
+                        super::MAX_PIXELS
+                    ),
+                ));
+            }
+            (w, h)
+        }
+    };
+    let c = spec.camera.get_ref();
+    let camera = Camera {
+        position: Vec3::from(c.position),
+        look_at: Vec3::from(c.look_at),
+        up: Vec3::from(c.up),
+        vfov_deg: c.vfov_deg,
+    };
+    if let Some((field, problem)) = camera.problem() {
+        return Err(src.at(spec.camera.span(), &format!("camera.{field}"), problem));
+    }
+    let tonemap = match &spec.tonemap {
+        None => Operator::default(),
+        Some(t) => t
+            .get_ref()
+            .parse()
+            .map_err(|e| src.at(t.span(), "tonemap", e))?,
+    };
+
+    // Materials, in name order; mesh files append theirs.
+    let mut materials = Vec::new();
+    let mut ids = HashMap::new();
+    for (mname, m) in &spec.materials {
+        let mat = material(src, mname, m)?;
+        mat.validate()
+            .map_err(|e| src.at(m.span(), &format!("materials.{mname}"), e))?;
+        ids.insert(mname.clone(), materials.len() as u32);
+        materials.push(mat);
+    }
+
+    // Objects: each mesh (file or shape, with its material) is built once and instanced.
+    let mut meshes: Vec<ShadedMesh> = Vec::new();
+    let mut mesh_ids: HashMap<(String, Option<u32>), usize> = HashMap::new();
+    let mut instances = Vec::new();
+    let mut motion = Vec::new();
+    let mut gltf_lights = Vec::new();
+    for (k, o) in spec.objects.iter().enumerate() {
+        let field = format!("objects[{k}]");
+        let span = o.span();
+        let o = o.get_ref();
+        let mat = match &o.material {
+            None => None,
+            Some(m) => Some(*ids.get(m.get_ref()).ok_or_else(|| {
+                let known: Vec<_> = spec.materials.keys().map(String::as_str).collect();
+                src.at(
+                    m.span(),
+                    &format!("{field}.material"),
+                    format!(
+                        "no material \"{}\" is defined (materials: {})",
+                        m.get_ref(),
+                        if known.is_empty() {
+                            "none".to_string()
+                        } else {
+                            known.join(", ")
+                        }
+                    ),
+                )
+            })?),
+        };
+        let rotation = |r: V3| {
+            let r = Vec3::from(r) * (std::f32::consts::PI / 180.0);
+            Quat::from_euler(EulerRot::ZYX, r.z, r.y, r.x)
+        };
+        let base = Keyframe {
+            time: 0.0,
+            translation: Vec3::from(o.translate),
+            rotation: rotation(o.rotate_deg),
+            scale: Vec3::from(o.scale),
+        };
+        let world = base.transform();
+        if let Some(m) = &o.mesh
+            && is_gltf(m.get_ref())
+        {
+            if !o.keyframes.is_empty() {
+                return Err(src.at(
+                    span,
+                    &format!("{field}.keyframes"),
+                    "keyframes move one instance; a glTF object places many (animate its nodes \
+                     by placing them as separate objects)",
+                ));
+            }
+            let l = super::gltf::read_file(&src.resolve(m.get_ref()))
+                .map_err(|e| src.at(m.span(), &format!("{field}.mesh"), e))?;
+            let (mesh_base, mat_base) = (meshes.len(), materials.len() as u32);
+            for mut sm in l.meshes {
+                match mat {
+                    Some(id) => sm.material.iter_mut().for_each(|x| *x = id),
+                    None => sm.material.iter_mut().for_each(|x| *x += mat_base),
+                }
+                meshes.push(sm);
+            }
+            if mat.is_none() {
+                materials.extend(l.materials);
+            }
+            for i in l.instances {
+                let inst = Instance::new(mesh_base + i.mesh, world * i.world_from_object);
+                inst.object_from_world(instances.len(), meshes.len())
+                    .map_err(|e| src.at(span.clone(), &field, e))?;
+                instances.push(inst);
+            }
+            gltf_lights.extend(l.lights);
+            continue;
+        }
+        let key = match (&o.mesh, &o.shape) {
+            (Some(m), None) => format!("mesh:{}", m.get_ref()),
+            (None, Some(s)) => format!("shape:{s:?}"),
+            _ => {
+                return Err(src.at(span, &field, "give exactly one of `mesh` and `shape`"));
+            }
+        };
+        let mesh_id = match mesh_ids.get(&(key.clone(), mat)) {
+            Some(&id) => id,
+            None => {
+                let shaded = match (&o.mesh, &o.shape) {
+                    (Some(m), _) => {
+                        let path = src.resolve(m.get_ref());
+                        let file = crate::mesh_file::load_shaded(&path)
+                            .map_err(|e| src.at(m.span(), &format!("{field}.mesh"), e))?;
+                        let mut shaded = file.mesh;
+                        match mat {
+                            Some(id) => shaded.material.iter_mut().for_each(|x| *x = id),
+                            None => {
+                                let base = materials.len() as u32;
+                                shaded.material.iter_mut().for_each(|x| *x += base);
+                                materials.extend(file.materials);
+                            }
+                        }
+                        shaded
+                    }
+                    (None, Some(s)) => {
+                        let id = match mat {
+                            Some(id) => id,
+                            None => {
+                                materials.push(crate::mesh_file::default_material());
+                                materials.len() as u32 - 1
+                            }
+                        };
+                        shape(s, id)
+                    }
+                    _ => unreachable!("checked above"),
+                };
+                meshes.push(shaded);
+                mesh_ids.insert((key, mat), meshes.len() - 1);
+                meshes.len() - 1
+            }
+        };
+        let inst = Instance::new(mesh_id, world);
+        inst.object_from_world(instances.len(), meshes.len())
+            .map_err(|_| {
+                src.at(
+                    span.clone(),
+                    &field,
+                    format!(
+                        "the transform (scale {:?}, rotate_deg {:?}) is singular or not finite",
+                        o.scale, o.rotate_deg
+                    ),
+                )
+            })?;
+        if !o.keyframes.is_empty() {
+            let mut keys = vec![base];
+            for kf in &o.keyframes {
+                let prev = *keys.last().unwrap_or(&base);
+                keys.push(Keyframe {
+                    time: kf.time,
+                    translation: kf.translate.map_or(prev.translation, Vec3::from),
+                    rotation: kf.rotate_deg.map_or(prev.rotation, rotation),
+                    scale: kf.scale.map_or(prev.scale, Vec3::from),
+                });
+            }
+            let m = InstanceMotion {
+                instance: instances.len(),
+                keys,
+            };
+            if let Some(p) = m.problem() {
+                return Err(src.at(span, &format!("{field}.keyframes"), p));
+            }
+            motion.push(m);
+        }
+        instances.push(inst);
+    }
+    if instances.is_empty() {
+        return Err(SceneError::Syntax {
+            path: src.path.to_path_buf(),
+            line: 1,
+            column: 1,
+            problem: "objects: the scene has no object (add an [[objects]] table)".to_string(),
+        });
+    }
+
+    let mut lights = gltf_lights;
+    for (k, l) in spec.lights.iter().enumerate() {
+        let light = make_light(src, l.get_ref(), k as u64)
+            .map_err(|e| src.at(l.span(), &format!("lights[{k}]"), e))?;
+        lights.push(light);
+    }
+
+    let scene = RenderScene {
+        name,
+        meshes,
+        instances,
+        materials,
+        lights,
+        camera,
+        width,
+        height,
+        depth: spec.depth.unwrap_or(1),
+        spp: spec.spp,
+        accuracy: spec.accuracy,
+        tonemap,
+        background: spec.background,
+        motion,
+    };
+    scene.validate().map_err(|e| match e {
+        SceneError::Invalid { field, problem, .. } => SceneError::Syntax {
+            path: src.path.to_path_buf(),
+            line: 0,
+            column: 0,
+            problem: format!("{field}: {problem}"),
+        },
+        e => e,
+    })?;
+    Ok(scene)
+}
+
+/// Whether `file` names a glTF file (placed as a whole: its nodes, materials and lights).
+fn is_gltf(file: &str) -> bool {
+    let ext = Path::new(file)
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    matches!(ext.as_deref(), Some("gltf" | "glb"))
+}
+
+/// A unit shape: a box `[-0.5, 0.5]^3`, a sphere of radius 1 (1,280 triangles, smooth
+/// normals), a quad `[-0.5, 0.5]^2` in the xz plane facing +y.
+fn shape(s: &Shape, material: u32) -> ShadedMesh {
+    match s {
+        Shape::Box => {
+            ShadedMesh::flat(cuboid("box", Vec3::splat(-0.5), Vec3::splat(0.5)), material)
+        }
+        Shape::Sphere => ShadedMesh::flat(icosphere("sphere", Vec3::ZERO, 1.0, 3), material)
+            .with_smooth_normals(),
+        Shape::Quad => {
+            let p = |x, z| Vec3::new(x, 0.0, z);
+            let mesh = Mesh::new(
+                "quad",
+                vec![p(-0.5, 0.5), p(0.5, 0.5), p(0.5, -0.5), p(-0.5, -0.5)],
+                vec![[0, 1, 2], [0, 2, 3]],
+            );
+            ShadedMesh::flat(mesh, material).with_uvs(vec![
+                glam::Vec2::new(0.0, 0.0),
+                glam::Vec2::new(1.0, 0.0),
+                glam::Vec2::new(1.0, 1.0),
+                glam::Vec2::new(0.0, 1.0),
+            ])
+        }
+    }
+}
+
+fn material(src: &Source, name: &str, m: &Spanned<MaterialSpec>) -> Result<Material, SceneError> {
+    let field = format!("materials.{name}");
+    let texture = |file: &str, wrap: Wrap| {
+        let p = src.resolve(file);
+        crate::texture::load(&p, wrap, &InverseToneMap::default())
+            .map(Arc::new)
+            .map_err(|e| src.at(m.span(), &format!("{field}.texture"), e))
+    };
+    Ok(match m.get_ref() {
+        MaterialSpec::Phong {
+            diffuse,
+            specular,
+            exponent,
+            ambient,
+            reflectance,
+        } => {
+            let mut out = Material::phong(name, *diffuse, *specular, *exponent);
+            out.phong.ambient = *ambient;
+            out.optics.reflectance = *reflectance;
+            out
+        }
+        MaterialSpec::Mirror {
+            reflectance,
+            diffuse,
+        } => {
+            let mut out = Material::phong(name, *diffuse, [0.0; 3], 0.0);
+            out.optics.reflectance = *reflectance;
+            out
+        }
+        MaterialSpec::Glass { ior, tint } => {
+            let mut out = Material::phong(name, [0.0; 3], [0.0; 3], 0.0);
+            out.optics.reflectance = [1.0; 3];
+            out.optics.transmittance = *tint;
+            out.optics.ior = *ior;
+            out.optics.fresnel = true;
+            out
+        }
+        MaterialSpec::Textured {
+            texture: file,
+            diffuse,
+            specular,
+            exponent,
+            ambient,
+            clamp,
+        } => {
+            let mut out = Material::phong(name, *diffuse, *specular, *exponent);
+            out.phong.ambient = *ambient;
+            out.texture = Some(texture(
+                file,
+                if *clamp { Wrap::Clamp } else { Wrap::Repeat },
+            )?);
+            out
+        }
+        MaterialSpec::Bdf { file, texture: tex } => {
+            let p = src.resolve(file);
+            let bdf = crate::bdf::format::read(&p)
+                .map_err(|e| src.at(m.span(), &format!("{field}.file"), e))?;
+            let mut out = Material::phong(name, [0.0; 3], [0.0; 3], 0.0);
+            out.bdf = Some(Arc::new(bdf));
+            if let Some(t) = tex {
+                out.texture = Some(texture(t, Wrap::Repeat)?);
+            }
+            out
+        }
+    })
+}
+
+fn make_light(src: &Source, l: &LightSpec, seed: u64) -> Result<Light, light::LightError> {
+    let v = Vec3::from;
+    Ok(match *l {
+        LightSpec::Goniodiagram {
+            ref file,
+            position,
+            up,
+            x,
+            colour,
+            uniform,
+        } => Light::Goniodiagram(light::Goniodiagram::load(
+            &src.resolve(file),
+            v(position),
+            v(up),
+            v(x),
+            colour,
+            if uniform {
+                light::GonioLookup::Uniform
+            } else {
+                light::GonioLookup::Search
+            },
+        )?),
+        LightSpec::Environment {
+            ref file,
+            scale,
+            up,
+            forward,
+            samples,
+        } => Light::Environment(light::Environment::load(
+            &src.resolve(file),
+            scale,
+            v(up),
+            v(forward),
+            samples,
+        )?),
+        LightSpec::Omni {
+            position,
+            intensity,
+        } => Light::Omni(light::Omni::new(v(position), intensity)?),
+        LightSpec::Spot {
+            position,
+            axis,
+            intensity,
+            inner_deg,
+            outer_deg,
+            exact,
+        } => Light::Spot(light::Spot::new(
+            v(position),
+            v(axis),
+            intensity,
+            inner_deg.to_radians(),
+            outer_deg.to_radians(),
+            if exact {
+                SpotFalloff::Exact
+            } else {
+                SpotFalloff::default()
+            },
+        )?),
+        LightSpec::Parallel {
+            direction,
+            irradiance,
+        } => Light::Parallel(light::Parallel::new(v(direction), irradiance)?),
+        LightSpec::Direct {
+            position,
+            axis,
+            intensity,
+        } => Light::Direct(light::Direct::new(v(position), v(axis), intensity)?),
+        LightSpec::Linear {
+            a,
+            b,
+            intensity,
+            points,
+        } => Light::Linear(light::Linear::new(
+            v(a),
+            v(b),
+            intensity,
+            points,
+            seed,
+            false,
+        )?),
+        LightSpec::Circular {
+            center,
+            normal,
+            radius,
+            radiance,
+            grid,
+        } => Light::Circular(light::Circular::new(
+            v(center),
+            v(normal),
+            radius,
+            radiance,
+            (grid[0], grid[1]),
+            seed,
+            false,
+        )?),
+        LightSpec::Rectangular {
+            corner,
+            edge_u,
+            edge_v,
+            radiance,
+            grid,
+        } => Light::Rectangular(light::Rectangular::new(
+            v(corner),
+            v(edge_u),
+            v(edge_v),
+            radiance,
+            (grid[0], grid[1]),
+            seed,
+            false,
+        )?),
+    })
+}

@@ -1,0 +1,249 @@
+//! Tests of the TOML scene file: a scene that loads, and every kind of bad input the file can
+//! hold, each answered with the file, the line and the problem.
+
+use std::path::{Path, PathBuf};
+
+use super::SceneError;
+use super::file::parse;
+
+const GOOD: &str = r#"
+resolution = [64, 48]
+depth = 2
+spp = 2
+tonemap = "reinhard"
+
+[camera]
+position = [0, 1, 4]
+look_at = [0, 1, 0]
+
+[materials.red]
+type = "phong"
+diffuse = [0.7, 0.1, 0.1]
+
+[materials.glass]
+type = "glass"
+ior = 1.45
+
+[[objects]]
+shape = "quad"
+material = "red"
+scale = [10, 1, 10]
+
+[[objects]]
+shape = "sphere"
+material = "glass"
+translate = [0, 1, 0]
+keyframes = [{ time = 1.0, translate = [0, 2, 0] }]
+
+[[objects]]
+shape = "sphere"
+material = "glass"
+translate = [1, 1, 0]
+
+[[lights]]
+type = "omni"
+position = [0, 3, 0]
+intensity = [10, 10, 10]
+
+[[lights]]
+type = "rectangular"
+corner = [-1, 2.9, -1]
+edge_u = [2, 0, 0]
+edge_v = [0, 0, 2]
+radiance = [1, 1, 1]
+"#;
+
+fn path() -> PathBuf {
+    PathBuf::from("/nonexistent/dir/test.toml")
+}
+
+/// The error of `text` with line `line` of GOOD replaced (or the text as given).
+fn error(text: &str) -> (String, SceneError) {
+    let e = parse(&path(), text).expect_err("the scene should be rejected");
+    (e.to_string(), e)
+}
+
+fn line_of(e: &SceneError) -> usize {
+    match e {
+        SceneError::Syntax { line, .. } => *line,
+        _ => 0,
+    }
+}
+
+#[test]
+fn a_good_scene_loads_with_instances_and_motion() {
+    let s = parse(&path(), GOOD).unwrap();
+    assert_eq!((s.width, s.height, s.depth, s.spp), (64, 48, 2, Some(2)));
+    assert_eq!(s.tonemap, crate::tonemap::Operator::Reinhard);
+    assert_eq!(s.meshes.len(), 2, "the two glass spheres share one mesh");
+    assert_eq!(s.instances.len(), 3);
+    assert_eq!(s.lights.len(), 2);
+    assert_eq!(s.motion.len(), 1);
+    assert_eq!(s.motion[0].at(1.0).translation.y, 2.0);
+    assert_eq!(s.materials[s.meshes[0].material[0] as usize].name, "red");
+    assert_eq!(s.name, "test");
+}
+
+#[test]
+fn unknown_key_names_file_line_and_key() {
+    let (msg, e) = error(&GOOD.replace("depth = 2", "depht = 2"));
+    assert!(msg.contains("test.toml") && msg.contains("depht"), "{msg}");
+    assert_eq!(line_of(&e), 3, "{msg}");
+    // Inside a tagged table too.
+    let (msg, _) = error(&GOOD.replace("ior = 1.45", "iorr = 1.45"));
+    assert!(msg.contains("iorr"), "{msg}");
+}
+
+#[test]
+fn wrong_type_names_the_line() {
+    let (msg, e) = error(&GOOD.replace("spp = 2", "spp = \"two\""));
+    assert_eq!(line_of(&e), 4, "{msg}");
+    let (msg, _) = error(&GOOD.replace("type = \"omni\"", "type = \"lamp\""));
+    assert!(msg.contains("lamp"), "{msg}");
+}
+
+#[test]
+fn missing_files_are_named() {
+    let (msg, e) = error(&GOOD.replace("shape = \"quad\"", "mesh = \"floor.obj\""));
+    assert!(
+        msg.contains("floor.obj") && msg.contains("objects[0].mesh"),
+        "{msg}"
+    );
+    assert_eq!(line_of(&e), 20, "{msg}");
+    let tex = GOOD.replace(
+        "type = \"phong\"\ndiffuse = [0.7, 0.1, 0.1]",
+        "type = \"textured\"\ntexture = \"wood.png\"",
+    );
+    let (msg, _) = error(&tex);
+    assert!(msg.contains("wood.png"), "{msg}");
+    let bdf = GOOD.replace(
+        "type = \"phong\"\ndiffuse = [0.7, 0.1, 0.1]",
+        "type = \"bdf\"\nfile = \"paint.bdf\"",
+    );
+    let (msg, _) = error(&bdf);
+    assert!(msg.contains("paint.bdf"), "{msg}");
+    let env = GOOD.replace(
+        "type = \"omni\"\nposition = [0, 3, 0]\nintensity = [10, 10, 10]",
+        "type = \"environment\"\nfile = \"sky.exr\"",
+    );
+    let (msg, _) = error(&env);
+    assert!(
+        msg.contains("sky.exr") && msg.contains("lights[0]"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn undefined_material_is_named_with_the_known_ones() {
+    let (msg, e) = error(&GOOD.replace("material = \"red\"", "material = \"blue\""));
+    assert!(
+        msg.contains("\"blue\"") && msg.contains("glass, red"),
+        "{msg}"
+    );
+    assert_eq!(line_of(&e), 21, "{msg}");
+}
+
+#[test]
+fn singular_camera_and_transform() {
+    let (msg, _) = error(&GOOD.replace("look_at = [0, 1, 0]", "look_at = [0, 1, 4]"));
+    assert!(msg.contains("camera.look_at"), "{msg}");
+    let (msg, _) =
+        error(&GOOD.replace("look_at = [0, 1, 0]", "look_at = [0, 1, 0]\nup = [0, 0, 1]"));
+    assert!(
+        msg.contains("camera.up") && msg.contains("singular"),
+        "{msg}"
+    );
+    let (msg, _) = error(&GOOD.replace("scale = [10, 1, 10]", "scale = [10, 0, 10]"));
+    assert!(
+        msg.contains("objects[0]") && msg.contains("singular"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn zero_or_huge_resolution() {
+    for bad in ["[0, 48]", "[100000, 48]", "[16384, 16384]"] {
+        let (msg, e) = error(&GOOD.replace("[64, 48]", bad));
+        assert!(msg.contains("resolution"), "{msg}");
+        assert_eq!(line_of(&e), 2, "{msg}");
+    }
+    let (msg, _) = error(&GOOD.replace("[64, 48]", "[64, 99999999999]"));
+    assert!(msg.contains("test.toml:2"), "{msg}");
+}
+
+#[test]
+fn bad_lights_and_settings_are_named() {
+    let (msg, _) = error(&GOOD.replace("intensity = [10, 10, 10]", "intensity = [10, -1, 10]"));
+    assert!(msg.contains("lights[0]"), "{msg}");
+    let (msg, _) = error(&GOOD.replace("tonemap = \"reinhard\"", "tonemap = \"filmic\""));
+    assert!(msg.contains("tonemap") && msg.contains("filmic"), "{msg}");
+    let (msg, _) = error(&GOOD.replace("ior = 1.45", "ior = -1.0"));
+    assert!(msg.contains("materials.glass"), "{msg}");
+    let (msg, _) = error(&GOOD.replace("time = 1.0", "time = 0.0"));
+    assert!(msg.contains("keyframes"), "{msg}");
+    let (msg, _) = error("[camera]\nposition = [0, 0, 1]\nlook_at = [0, 0, 0]\n");
+    assert!(msg.contains("no object"), "{msg}");
+    let (msg, _) = error("resolution = [");
+    assert!(msg.contains("test.toml:1"), "{msg}");
+}
+
+#[test]
+fn mesh_files_resolve_relative_to_the_scene_and_load_through_load() {
+    let d = tempfile::tempdir().unwrap();
+    std::fs::create_dir(d.path().join("m")).unwrap();
+    std::fs::write(
+        d.path().join("m/tri.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    let scene = GOOD.replace("shape = \"quad\"", "mesh = \"m/tri.obj\"");
+    let p: &Path = &d.path().join("s.toml");
+    std::fs::write(p, scene).unwrap();
+    let s = super::load(p.to_str().unwrap()).unwrap();
+    assert_eq!(s.meshes[0].mesh.indices.len(), 1);
+    assert_eq!(s.name, "s");
+}
+
+#[test]
+fn gltf_objects_are_placed_whole() {
+    let d = tempfile::tempdir().unwrap();
+    std::fs::write(d.path().join("q.gltf"), super::gltf::tests::quad_gltf()).unwrap();
+    let scene = GOOD.replace(
+        "shape = \"quad\"\nmaterial = \"red\"\nscale = [10, 1, 10]",
+        "mesh = \"q.gltf\"\ntranslate = [0, 5, 0]",
+    );
+    let p = d.path().join("g.toml");
+    std::fs::write(&p, &scene).unwrap();
+    let s = super::load(p.to_str().unwrap()).unwrap();
+    // The node's z = -2 and the object's y = 5 compose.
+    let t = s.instances[0].world_from_object.translation;
+    assert_eq!((t.y, t.z), (5.0, -2.0));
+    assert_eq!(
+        s.lights.len(),
+        3,
+        "the glTF's point light joins the file's two"
+    );
+    assert!(s.materials[s.meshes[0].material[0] as usize].optics.fresnel);
+    let bad = scene.replace("translate = [0, 5, 0]", "keyframes = [{ time = 1.0 }]");
+    std::fs::write(&p, bad).unwrap();
+    let e = super::load(p.to_str().unwrap()).unwrap_err().to_string();
+    assert!(e.contains("keyframes") && e.contains("g.toml:"), "{e}");
+}
+
+#[test]
+fn a_goniodiagram_from_an_ies_file() {
+    let d = tempfile::tempdir().unwrap();
+    std::fs::write(
+        d.path().join("lamp.ies"),
+        "IESNA:LM-63-2002\nTILT=NONE\n1 1000 1 3 1 1 2 0 0 0\n1 1 100\n0 45 90\n0\n1000 800 100\n",
+    )
+    .unwrap();
+    let scene = GOOD.replace(
+        "type = \"omni\"\nposition = [0, 3, 0]\nintensity = [10, 10, 10]",
+        "type = \"goniodiagram\"\nfile = \"lamp.ies\"\nposition = [0, 3, 0]",
+    );
+    let p = d.path().join("l.toml");
+    std::fs::write(&p, scene).unwrap();
+    let s = super::load(p.to_str().unwrap()).unwrap();
+    assert_eq!(s.lights[0].kind(), crate::light::LightKind::Goniodiagram);
+}
