@@ -4,14 +4,16 @@
 //! and the spot's exact falloff cosine and the environment light.
 //!
 //! Protocol: shading points are a `side` x `side` grid on a gently curved patch of ground
-//! (normals tilted by the slope), visited in tiles of 4 x 4 (8 x 4 for 32-lane-or-wider
-//! none; the packets are runs of neighbours, as a renderer's are), two uniform numbers per
-//! point from a fixed hash. One *call* evaluates one light for one packet: every sample
+//! (normals tilted by the slope), visited in tiles of 4 x 4 (so packets of 4, 8 and 16
+//! lanes are neighbours, as a renderer's are), two uniform numbers per point from a fixed
+//! hash. One *call* evaluates one light for one packet: every sample
 //! (`Light::samples`: 1 for point lights, 7 linear, 21 circular and rectangular, 16
 //! environment), `li * cos` summed per lane so that nothing is optimised away. With
 //! `shadows` 1, each sample's shadow packet is also traced through the two-level BSP
 //! (`Accel::occluded`) of a scene of the ground and a few spheres between it and the
-//! lights. Samples of all backends are interleaved round-robin and each row reports the
+//! lights. A timed sample sweeps the points `ceil(21 / samples)` times (about 21 light
+//! samples per point for every kind, so that point lights too are timed over
+//! milliseconds) and reports seconds per sweep. Samples of all backends are interleaved round-robin and each row reports the
 //! median; `speedup` = the scalar row's seconds (one shading point at a time) / this
 //! row's, same light, same `shadows`, same run.
 
@@ -337,6 +339,8 @@ struct Lighting<'a> {
     light: &'a Light,
     points: &'a Points,
     shadows: Option<&'a Bsp>,
+    /// Sweeps over the points.
+    passes: u32,
 }
 
 impl Kernel for Lighting<'_> {
@@ -346,29 +350,31 @@ impl Kernel for Lighting<'_> {
         let pts = self.points;
         let mut acc = Rgbs::zero(l);
         let samples = self.light.samples();
-        let mut i = 0;
-        while i + L::N <= pts.len() {
-            let load3 = |v: &[Vec<f32>; 3]| {
-                Vec3s::new(l.load(&v[0][i..]), l.load(&v[1][i..]), l.load(&v[2][i..]))
-            };
-            let p = std::hint::black_box(load3(&pts.p));
-            let n = std::hint::black_box(load3(&pts.n));
-            let u = [l.load(&pts.u[0][i..]), l.load(&pts.u[1][i..])];
-            let active = l.splat_mask(true);
-            for k in 0..samples {
-                let s = self.light.sample(l, &p, &n, active, k, u);
-                let mut lit = s.active;
-                if let Some(bsp) = self.shadows
-                    && lit.any()
-                {
-                    let rays = shadow_rays(l, &p, &n, &s);
-                    lit = lit.and_not(bsp.occluded(l, &rays, lit));
+        for _ in 0..self.passes {
+            let mut i = 0;
+            while i + L::N <= pts.len() {
+                let load3 = |v: &[Vec<f32>; 3]| {
+                    Vec3s::new(l.load(&v[0][i..]), l.load(&v[1][i..]), l.load(&v[2][i..]))
+                };
+                let p = std::hint::black_box(load3(&pts.p));
+                let n = std::hint::black_box(load3(&pts.n));
+                let u = [l.load(&pts.u[0][i..]), l.load(&pts.u[1][i..])];
+                let active = l.splat_mask(true);
+                for k in 0..samples {
+                    let s = self.light.sample(l, &p, &n, active, k, u);
+                    let mut lit = s.active;
+                    if let Some(bsp) = self.shadows
+                        && lit.any()
+                    {
+                        let rays = shadow_rays(l, &p, &n, &s);
+                        lit = lit.and_not(bsp.occluded(l, &rays, lit));
+                    }
+                    let cos = n.dot(s.wi);
+                    let w = lit.select(cos, l.splat(0.0));
+                    acc = s.li.mul_add(w, acc);
                 }
-                let cos = n.dot(s.wi);
-                let w = lit.select(cos, l.splat(0.0));
-                acc = s.li.mul_add(w, acc);
+                i += L::N;
             }
-            i += L::N;
         }
         let mut sum = 0.0;
         for k in 0..L::N {
@@ -391,7 +397,7 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
             ctx.note(format!("table2: backend {b} skipped: {why}"));
         }
     }
-    let pts = points(ctx.pick(64, 128));
+    let pts = points(ctx.pick(128, 256));
     let scene = shadow_scene();
     let bsp = Bsp::build(&scene, &BspParams::default())?;
     let lights = lights()?;
@@ -401,15 +407,20 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     let mut seconds: BTreeMap<(usize, u32, Backend), Vec<f64>> = BTreeMap::new();
     for (li, (_, light)) in lights.iter().enumerate() {
         for shadows in [0u32, 1] {
+            // Each timed sample sweeps the points until about 21 light samples per point
+            // were evaluated (so that point lights are timed over several milliseconds too);
+            // the reported seconds are per sweep.
+            let passes = 21u32.div_ceil(light.samples());
             let work = Lighting {
                 light,
                 points: &pts,
                 shadows: (shadows == 1).then_some(&bsp),
+                passes,
             };
             let sample = |backend: Backend| -> anyhow::Result<f64> {
                 let start = Instant::now();
                 std::hint::black_box(backend.run(work)?);
-                Ok(start.elapsed().as_secs_f64())
+                Ok(start.elapsed().as_secs_f64() / passes as f64)
             };
             for &backend in &backends {
                 sample(backend)?; // warm-up
@@ -569,7 +580,9 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
          the ground and six spheres. Median of interleaved samples; `speedup` = scalar \
          seconds / row seconds, same light and `shadows`, same run. The goniodiagram is a \
          made-up downlight table of 25 C-planes (quadrant symmetry) x 37 non-uniform \
-         gammas. `--quick` uses a 64 x 64 grid instead of 128 x 128.\n\n",
+         gammas. Seconds are per sweep over the points (each timed sample makes \
+         `ceil(21 / samples)` sweeps). `--quick` uses a 128 x 128 grid instead of 256 x \
+         256.\n\n",
     );
     let mut ours = Vec::new();
     for light in t.distinct("light")? {

@@ -8,8 +8,8 @@ use glam::Vec3;
 
 use super::sincos::sincos;
 use super::{
-    LightError, LightSample, Strata, check_colour, check_dir, check_point, check_positive, finish,
-    scaled, toward,
+    LightError, LightSample, Strata, check_colour, check_dir, check_point, check_positive,
+    finish_scaled, toward,
 };
 
 /// Default polar grid (rings, sectors): 21 points, as many as the paper's rectangle.
@@ -94,8 +94,15 @@ impl Circular {
         let cos_light = -Vec3s::splat(l, self.normal).dot(t.wi);
         let active = t.active & cos_light.gt(l.splat(0.0));
         let area = std::f32::consts::PI * self.radius * self.radius / self.strata.count() as f32;
-        let li = scaled(l, self.radiance, cos_light * t.inv_d2 * area);
-        finish(l, n, active, t.wi, t.dist, li)
+        finish_scaled(
+            l,
+            n,
+            active,
+            t.wi,
+            t.dist,
+            self.radiance,
+            cos_light * t.inv_d2 * area,
+        )
     }
 }
 

@@ -7,9 +7,7 @@
 use coherent_simd::{Lanes, SimdF32, Vec3s};
 use glam::Vec3;
 
-use super::{
-    LightError, LightSample, check_colour, check_dir, check_point, finish, scaled, toward,
-};
+use super::{LightError, LightSample, check_colour, check_dir, check_point, finish_scaled, toward};
 
 /// A point light at `position` with intensity `intensity * max(0, cos theta)` (W/sr),
 /// `theta` the angle between `axis` and the direction to the lit point.
@@ -41,8 +39,7 @@ impl Direct {
         // cos(theta) = axis . (-wi)
         let cos = -Vec3s::splat(l, self.axis).dot(t.wi);
         let active = t.active & cos.gt(l.splat(0.0));
-        let li = scaled(l, self.intensity, cos * t.inv_d2);
-        finish(l, n, active, t.wi, t.dist, li)
+        finish_scaled(l, n, active, t.wi, t.dist, self.intensity, cos * t.inv_d2)
     }
 }
 

@@ -22,9 +22,7 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::photometry::{PhotometricTable, PhotometricType, WATTS_PER_LUMEN};
-use super::{
-    LightError, LightSample, check_colour, check_dir, check_point, finish, scaled, toward,
-};
+use super::{LightError, LightSample, check_colour, check_dir, check_point, finish_scaled, toward};
 use crate::approx::{acos, atan2};
 use crate::tabulated::{Axis, Cell, Grid};
 
@@ -211,8 +209,7 @@ impl Goniodiagram {
         let t = toward(l, p, n, active, &Vec3s::splat(l, self.position));
         let cd = self.candela(l, &-t.wi);
         let active = t.active & cd.gt(l.splat(0.0));
-        let li = scaled(l, self.scale, cd * t.inv_d2);
-        finish(l, n, active, t.wi, t.dist, li)
+        finish_scaled(l, n, active, t.wi, t.dist, self.scale, cd * t.inv_d2)
     }
 
     /// The uniform grid's largest absolute error at the table's own nodes, and the largest

@@ -6,7 +6,7 @@
 use coherent_simd::{Lanes, Vec3s};
 use glam::Vec3;
 
-use super::{LightError, LightSample, Strata, check_colour, check_point, finish, scaled, toward};
+use super::{LightError, LightSample, Strata, check_colour, check_point, finish_scaled, toward};
 
 /// The paper's point count for linear lights.
 pub const DEFAULT_POINTS: u32 = 7;
@@ -67,8 +67,15 @@ impl Linear {
         let s = (o[0] + k as f32) * (1.0 / count as f32);
         let q = Vec3s::splat(l, self.b - self.a).mul_add(s, Vec3s::splat(l, self.a));
         let t = toward(l, p, n, active, &q);
-        let li = scaled(l, self.intensity, t.inv_d2 * (1.0 / count as f32));
-        finish(l, n, t.active, t.wi, t.dist, li)
+        finish_scaled(
+            l,
+            n,
+            t.active,
+            t.wi,
+            t.dist,
+            self.intensity,
+            t.inv_d2 * (1.0 / count as f32),
+        )
     }
 }
 

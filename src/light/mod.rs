@@ -412,6 +412,27 @@ pub(crate) fn finish<L: Lanes>(
     }
 }
 
+/// [`finish`] for a radiance `c * s` (one select on `s` instead of one per channel).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn finish_scaled<L: Lanes>(
+    l: L,
+    n: &Vec3s<L>,
+    active: L::Mask,
+    wi: Vec3s<L>,
+    dist: L::F32s,
+    c: [f32; 3],
+    s: L::F32s,
+) -> LightSample<L> {
+    let s = active.select(s, l.splat(0.0));
+    LightSample {
+        active,
+        wi: Vec3s::select(active, wi, *n),
+        dist: active.select(dist, l.splat(0.0)),
+        li: scaled(l, c, s),
+    }
+}
+
 /// `c` scaled by one value per lane.
 #[inline(always)]
 pub(crate) fn scaled<L: Lanes>(l: L, c: [f32; 3], s: L::F32s) -> Rgbs<L> {

@@ -4,7 +4,7 @@
 use coherent_simd::{Lanes, Vec3s};
 use glam::Vec3;
 
-use super::{LightError, LightSample, check_colour, check_point, finish, scaled, toward};
+use super::{LightError, LightSample, check_colour, check_point, finish_scaled, toward};
 
 /// A point light radiating `intensity` (W/sr per channel) in every direction.
 #[derive(Debug, Clone, PartialEq)]
@@ -38,8 +38,7 @@ impl Omni {
         active: L::Mask,
     ) -> LightSample<L> {
         let t = toward(l, p, n, active, &Vec3s::splat(l, self.position));
-        let li = scaled(l, self.intensity, t.inv_d2);
-        finish(l, n, t.active, t.wi, t.dist, li)
+        finish_scaled(l, n, t.active, t.wi, t.dist, self.intensity, t.inv_d2)
     }
 }
 

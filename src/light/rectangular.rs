@@ -6,7 +6,7 @@
 use coherent_simd::{Lanes, SimdF32, Vec3s};
 use glam::Vec3;
 
-use super::{LightError, LightSample, Strata, check_colour, check_point, finish, scaled, toward};
+use super::{LightError, LightSample, Strata, check_colour, check_point, finish_scaled, toward};
 
 /// The paper's grid for rectangular lights.
 pub const DEFAULT_GRID: (u32, u32) = (7, 3);
@@ -95,12 +95,15 @@ impl Rectangular {
         let to = toward(l, p, n, active, &q);
         let cos_light = -Vec3s::splat(l, self.normal).dot(to.wi);
         let active = to.active & cos_light.gt(l.splat(0.0));
-        let li = scaled(
+        finish_scaled(
             l,
+            n,
+            active,
+            to.wi,
+            to.dist,
             self.radiance,
             cos_light * to.inv_d2 * (self.area / count as f32),
-        );
-        finish(l, n, active, to.wi, to.dist, li)
+        )
     }
 }
 

@@ -13,9 +13,7 @@ use coherent_simd::{Lanes, SimdF32, Vec3s};
 use glam::Vec3;
 
 use super::sincos::cos_taylor;
-use super::{
-    LightError, LightSample, check_colour, check_dir, check_point, finish, scaled, toward,
-};
+use super::{LightError, LightSample, check_colour, check_dir, check_point, finish_scaled, toward};
 use crate::approx::acos;
 
 /// How the spot's falloff cosine is computed.
@@ -108,8 +106,7 @@ impl Spot {
         let cos_axis = -Vec3s::splat(l, self.axis).dot(t.wi);
         let f = self.falloff(l, cos_axis);
         let active = t.active & f.gt(l.splat(0.0));
-        let li = scaled(l, self.intensity, f * t.inv_d2);
-        finish(l, n, active, t.wi, t.dist, li)
+        finish_scaled(l, n, active, t.wi, t.dist, self.intensity, f * t.inv_d2)
     }
 }
 

@@ -4,7 +4,7 @@
 //! caller's uniform numbers (Cranley-Patterson rotation: `fract(offset + u)`, still
 //! uniform in the stratum).
 
-use coherent_simd::{Lanes, SimdF32};
+use coherent_simd::{Lanes, SimdF32, SimdMask};
 
 /// Per-stratum offsets in `[0, 1)^2` from a seed, and whether to jitter them.
 #[derive(Debug, Clone, PartialEq)]
@@ -65,11 +65,12 @@ impl Strata {
     pub fn offset<L: Lanes>(&self, l: L, k: u32, u: [L::F32s; 2]) -> [L::F32s; 2] {
         let o = self.offset1(k);
         if self.jitter {
-            let a = l.splat(o[0]) + u[0];
-            let b = l.splat(o[1]) + u[1];
-            // fract, and below 1 even when rounding reaches it.
+            // fract(o + u) for o, u in [0, 1): subtract 1 at or above 1 (cheaper than
+            // floor on SSE2), and stay below 1 when rounding reaches it.
+            let one = l.splat(1.0);
             let below = l.splat(1.0f32.next_down());
-            [(a - a.floor()).min(below), (b - b.floor()).min(below)]
+            let wrap = |x: L::F32s| x.ge(one).select(x - one, x).min(below);
+            [wrap(l.splat(o[0]) + u[0]), wrap(l.splat(o[1]) + u[1])]
         } else {
             [l.splat(o[0]), l.splat(o[1])]
         }
