@@ -137,7 +137,15 @@ mod tests {
     use coherent_simd::scalar::Scalar;
 
     fn cam() -> PinholeCamera {
-        PinholeCamera::new(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 90.0, 200, 100).unwrap()
+        PinholeCamera::new(
+            Vec3::new(0.0, 0.0, 5.0),
+            Vec3::ZERO,
+            Vec3::Y,
+            90.0,
+            200,
+            100,
+        )
+        .unwrap()
     }
 
     #[test]

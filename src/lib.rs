@@ -12,8 +12,8 @@ pub use coherent_obvhs as obvhs;
 
 pub mod accel_any;
 pub mod approx;
-pub mod camera;
 pub mod bdf;
+pub mod camera;
 pub mod film;
 pub mod kernels;
 pub mod light;

@@ -4,9 +4,9 @@
 //! critical angle; and the same image on every lane backend and accelerator.
 //! Small images: the whole file runs in seconds.
 
+use coherent::accel::{Accel, AccelError};
 use coherent::accel::{Instance, Mesh};
 use coherent::accel_any::{AccelKind, AnyAccel, AnyParams};
-use coherent::accel::{Accel, AccelError};
 use coherent::light::Light;
 use coherent::material::Material;
 use coherent::render::centres::{psnr, render_centres};
@@ -125,10 +125,8 @@ fn lambertian_plane_under_an_omni_light_matches_the_closed_form() {
             let dist2 = to.length_squared();
             let cos = to.z / dist2.sqrt();
             for c in 0..3 {
-                let want = f64::from(kd[c]) / std::f64::consts::PI
-                    * f64::from(intensity[c])
-                    * cos
-                    / dist2;
+                let want =
+                    f64::from(kd[c]) / std::f64::consts::PI * f64::from(intensity[c]) * cos / dist2;
                 let got = f64::from(img[(y * W + x) as usize][c]);
                 assert!(
                     (got - want).abs() <= 2e-3 * want + 1e-6,
@@ -329,7 +327,11 @@ fn a_glass_slab_shifts_rays_by_the_known_offset() {
             let straight = o + d * ((-3.0 - o.z) / d.z);
             // Perpendicular offset between the parallel in/out rays equals `shift`.
             let perp = (p2 - straight) - d * (p2 - straight).dot(d);
-            assert!((perp.length() - shift).abs() < 1e-6, "{} vs {shift}", perp.length());
+            assert!(
+                (perp.length() - shift).abs() < 1e-6,
+                "{} vs {shift}",
+                perp.length()
+            );
             if p2.x.abs() < 0.05 {
                 continue;
             }
@@ -488,5 +490,8 @@ fn the_thread_count_does_not_change_the_image() {
         assert!(out.stats.rays(RayKind::Shadow) > 0);
         images.push(out.image());
     }
-    assert!(images[0] == images[1], "1 and 3 threads gave different images");
+    assert!(
+        images[0] == images[1],
+        "1 and 3 threads gave different images"
+    );
 }

@@ -99,10 +99,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         ProgressBar::new(1000)
     };
     bar.set_style(
-        ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:40} {percent:>3}% {msg}",
-        )
-        .expect("a valid template"),
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {percent:>3}% {msg}")
+            .expect("a valid template"),
     );
     let spp = match method {
         Method::Uniform { spp } => Some(spp),

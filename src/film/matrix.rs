@@ -2,8 +2,9 @@
 //! sum and a sample count per pixel; a pixel's samples go alternately to one and the other,
 //! and the difference of their estimates measures the accuracy.
 
-use super::accuracy::relative_difference;
+use super::accuracy::display_difference;
 use super::superpixel::Superpixels;
+use crate::tonemap::ToneMap;
 
 /// Which matrix sample number `k` of pixel `p` goes to. Not simply `k % 2`: a pixel's
 /// Halton samples of even and odd `k` lie in its left and right halves (the lowest binary
@@ -58,12 +59,12 @@ pub struct Film {
     /// Pixels whose value is interpolated from their superpixel's corners (until they have
     /// samples in both matrices).
     pub interpolated: Vec<bool>,
-    /// Noise floor of the accuracy measure (see [`relative_difference`]).
-    pub floor: f32,
+    /// The tone mapping the accuracy is measured through (see [`display_difference`]).
+    pub tonemap: ToneMap,
 }
 
 impl Film {
-    pub(crate) fn new(width: u32, height: u32, superpixels: Superpixels, floor: f32) -> Film {
+    pub(crate) fn new(width: u32, height: u32, superpixels: Superpixels, tonemap: ToneMap) -> Film {
         let n = width as usize * height as usize;
         Film {
             width,
@@ -71,7 +72,7 @@ impl Film {
             matrices: [ScreenMatrix::new(n), ScreenMatrix::new(n)],
             superpixels,
             interpolated: vec![false; n],
-            floor,
+            tonemap,
         }
     }
 
@@ -94,12 +95,12 @@ impl Film {
         }
     }
 
-    /// The relative difference of the two matrices' estimates at `p`, or `None` unless both
+    /// The display difference of the two matrices' estimates at `p`, or `None` unless both
     /// have samples there.
     pub fn error(&self, p: usize) -> Option<f32> {
         let [a, b] = &self.matrices;
         (a.count[p] > 0 && b.count[p] > 0)
-            .then(|| relative_difference(a.mean(p), b.mean(p), self.floor))
+            .then(|| display_difference(&self.tonemap, a.mean(p), b.mean(p)))
     }
 
     /// The estimate of pixel `p`: the mean of all its samples; the superpixel interpolation

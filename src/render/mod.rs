@@ -217,9 +217,8 @@ impl<'s, A: Accel> Renderer<'s, A> {
         if can_light.any() {
             for (li, light) in self.scene.lights.iter().enumerate() {
                 for k in 0..light.samples() {
-                    let stream = rng::hash1(
-                        seg.path.wrapping_mul(0x9e37_79b1) ^ ((li as u32) << 20) ^ k,
-                    );
+                    let stream =
+                        rng::hash1(seg.path.wrapping_mul(0x9e37_79b1) ^ ((li as u32) << 20) ^ k);
                     let u = [
                         rng::uniform(l, ids, stream),
                         rng::uniform(l, ids, stream ^ 0x5555_5555),

@@ -41,6 +41,7 @@ pub fn hash1(x: u32) -> u32 {
 mod tests {
     use super::*;
     use coherent_simd::scalar::Scalar;
+    use coherent_simd::{SimdF32, SimdI32};
 
     #[test]
     fn packet_hash_matches_the_scalar_one_and_numbers_are_uniform() {
@@ -48,13 +49,16 @@ mod tests {
         let mut sum = 0.0f64;
         let n = 10_000;
         for i in 0..n {
-            assert_eq!(hash(l, i) as u32, hash1(i as u32));
-            let u = uniform(l, i, 3);
+            assert_eq!(hash(l, l.splat_i32(i)).lane(0) as u32, hash1(i as u32));
+            let u = uniform(l, l.splat_i32(i), 3).lane(0);
             assert!((0.0..1.0).contains(&u));
             sum += f64::from(u);
         }
         let mean = sum / f64::from(n);
         assert!((mean - 0.5).abs() < 0.01, "{mean}");
-        assert_ne!(uniform(l, 7, 0), uniform(l, 7, 1));
+        assert_ne!(
+            uniform(l, l.splat_i32(7), 0).lane(0),
+            uniform(l, l.splat_i32(7), 1).lane(0)
+        );
     }
 }

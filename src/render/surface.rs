@@ -160,7 +160,10 @@ impl Geometry {
         let prim = active.select_i32(hits.prim, zero_i);
         let tri = l.gather_u32(&self.tri_offset, inst) + prim;
         let t = active.select(hits.t, l.splat(0.0));
-        let (b1, b2) = (active.select(hits.u, l.splat(0.0)), active.select(hits.v, l.splat(0.0)));
+        let (b1, b2) = (
+            active.select(hits.u, l.splat(0.0)),
+            active.select(hits.v, l.splat(0.0)),
+        );
         let b0 = l.splat(1.0) - b1 - b2;
         let material = l.gather_u32(&self.material, tri);
 

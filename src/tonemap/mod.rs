@@ -13,6 +13,9 @@
 //! Luminance is Rec. 709 luminance of the radiance, read as cd/m^2. Colours keep their
 //! chromaticity: every channel is scaled by `L_display / L`.
 
+// Per-packet code uses index loops over lanes (see the README's notes on pulp).
+#![allow(clippy::needless_range_loop)]
+
 use core::fmt;
 use core::str::FromStr;
 
@@ -20,7 +23,7 @@ use coherent_simd::approx::{EXP_MAX_REL_ERROR, LOG_MAX_ABS_ERROR, PowRange};
 use coherent_simd::{Lanes, Rgbs, SimdF32, SimdMask};
 
 /// A global tone-mapping operator.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Operator {
     /// Tumblin and Rushmeier 1993 (standing in for the paper's reference [22]).
     #[default]
@@ -208,6 +211,11 @@ impl ToneMap {
 
     pub fn operator(&self) -> Operator {
         self.op
+    }
+
+    /// Whether everything maps to black (a black or empty pre-render).
+    pub fn is_black(&self) -> bool {
+        self.black
     }
 
     /// Largest absolute error of [`ToneMap::apply`]'s display luminance (in `[0, 1]`)

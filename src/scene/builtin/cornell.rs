@@ -122,7 +122,6 @@ pub fn cornell() -> RenderScene {
     )
     .expect("a valid light");
     RenderScene {
-        lights: Vec::new(),
         name: "cornell".to_string(),
         meshes: vec![room, tall_box, sphere],
         instances,

@@ -175,7 +175,6 @@ pub fn bare_mesh(path: &Path) -> Result<RenderScene, SceneError> {
     let name = file.mesh.mesh.name.clone();
     let (width, height) = super::DEFAULT_RESOLUTION;
     Ok(RenderScene {
-        lights: Vec::new(),
         name,
         meshes: vec![file.mesh],
         instances: vec![Instance::identity(0)],
