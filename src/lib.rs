@@ -10,14 +10,17 @@ pub use coherent_embree as embree;
 #[cfg(feature = "obvhs")]
 pub use coherent_obvhs as obvhs;
 
+pub mod accel_any;
 pub mod approx;
 pub mod bdf;
+pub mod camera;
 pub mod film;
 pub mod kernels;
 pub mod light;
 pub mod machine;
 pub mod material;
 pub mod mesh_file;
+pub mod render;
 pub mod sampler;
 pub mod scene;
 pub mod tabulated;

@@ -1,0 +1,3 @@
+//! The `coherent` binary's subcommands that need more than a few lines.
+
+pub mod render;

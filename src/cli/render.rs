@@ -1,0 +1,175 @@
+//! `coherent render` (paper section 7): load a scene, build the chosen accelerator, render
+//! with the chosen lane backend on a pool of T threads through the progressive film, write
+//! the image, and print one summary line (rays by kind, time, Mrays/s, active lanes per
+//! packet per stage, material passes per packet).
+
+use std::time::Instant;
+
+use anyhow::{Context, bail};
+use coherent::accel::Accel;
+use coherent::accel_any::{AccelKind, AnyAccel, AnyParams};
+use coherent::film::{FilmOptions, Method, PassReport, render};
+use coherent::render::{RayKind, Renderer};
+use coherent::simd::Backend;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::RenderArgs;
+
+/// Runs `coherent render`.
+pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
+    // Check the cheap things before loading anything.
+    let backend = match &args.backend {
+        Some(b) => {
+            let b: Backend = b.parse()?;
+            if let Some(reason) = b.unavailable_reason() {
+                bail!("backend `{}` cannot run here: {reason}", b.name());
+            }
+            b
+        }
+        None => *Backend::available()
+            .iter()
+            .max_by_key(|b| b.lanes())
+            .unwrap_or(&Backend::Scalar),
+    };
+    let kind: AccelKind = args.accel.parse()?;
+    match args.out.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case("exr") || e.eq_ignore_ascii_case("png") => {}
+        _ => bail!(
+            "{}: the output must be an .exr or .png file",
+            args.out.display()
+        ),
+    }
+    if args.threads == Some(0) {
+        bail!("--threads must be at least 1");
+    }
+
+    let t_load = Instant::now();
+    let mut scene = coherent::scene::load(&args.scene)?;
+    if let Some((w, h)) = args.resolution {
+        scene.width = w;
+        scene.height = h;
+    }
+    if let Some(d) = args.depth {
+        scene.depth = d;
+    }
+    scene
+        .validate()
+        .with_context(|| format!("scene {}", args.scene))?;
+    let (w, h) = (scene.width, scene.height);
+    let method = match (args.spp, args.accuracy, scene.spp, scene.accuracy) {
+        (Some(spp), _, _, _) => Method::Uniform { spp },
+        (None, Some(accuracy), _, _) | (None, None, _, Some(accuracy)) => Method::Adaptive {
+            accuracy,
+            max_samples_per_pixel: args.max_spp,
+            time_budget: None,
+        },
+        (None, None, Some(spp), None) => Method::Uniform { spp },
+        (None, None, None, None) => Method::Adaptive {
+            accuracy: 0.05,
+            max_samples_per_pixel: args.max_spp,
+            time_budget: None,
+        },
+    };
+    let mut opts = FilmOptions::new(w, h, method);
+    if let Some(op) = &args.tonemap {
+        opts.tonemap = op.parse().map_err(|e| anyhow::anyhow!("--tonemap: {e}"))?;
+    }
+    opts.validate()?;
+
+    let t_build = Instant::now();
+    let accel = AnyAccel::build(&scene.accel_scene(), &AnyParams::of(kind))
+        .with_context(|| format!("building the {kind} accelerator for {}", scene.name))?;
+    let build = t_build.elapsed();
+    let memory = accel.memory_bytes();
+    let renderer = Renderer::new(&scene, accel, w, h).context("the scene's camera")?;
+
+    let threads = args.threads.unwrap_or_else(|| {
+        std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+    });
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .context("starting the worker threads")?;
+
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(1000)
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {percent:>3}% {msg}")
+            .expect("a valid template"),
+    );
+    let spp = match method {
+        Method::Uniform { spp } => Some(spp),
+        Method::Adaptive { .. } => None,
+    };
+    let progress = |p: &PassReport| {
+        let r = &p.record;
+        let done = match spp {
+            Some(n) => f64::from(r.pass) / f64::from(n.max(1)),
+            None => r.done,
+        };
+        bar.set_position((done.clamp(0.0, 1.0) * 1000.0) as u64);
+        bar.set_message(format!(
+            "pass {}, {:.1} Mrays",
+            r.pass,
+            r.rays as f64 * 1e-6
+        ));
+    };
+    let t_render = Instant::now();
+    let rendered = pool.install(|| render(backend, &renderer, &opts, &progress))?;
+    let seconds = t_render.elapsed();
+    bar.finish_and_clear();
+    rendered.write(&args.out)?;
+
+    let st = &rendered.stats;
+    let rays = st.total_rays();
+    let mut kinds = Vec::new();
+    for k in RayKind::ALL {
+        kinds.push(format!("{} {}", k.name(), st.rays(k)));
+    }
+    let lanes: Vec<String> = RayKind::ALL
+        .iter()
+        .filter(|k| st.kinds[**k as usize].packets > 0)
+        .map(|k| format!("{} {:.2}", k.name(), st.kinds[*k as usize].average()))
+        .collect();
+    println!(
+        "{}: {}x{} {} ({} triangles), {} + {}, {} thread(s), {}: {:.3} s ({:.1} Mrays/s); rays: {}; \
+         active lanes per packet (of {}): {}; material passes per packet {:.2}; \
+         build {:.3} s, {:.1} MB; load {:.3} s -> {}",
+        scene.name,
+        w,
+        h,
+        method.name(),
+        scene.triangles(),
+        backend.name(),
+        kind,
+        threads,
+        stop_text(&rendered),
+        seconds.as_secs_f64(),
+        rays as f64 / seconds.as_secs_f64().max(1e-9) * 1e-6,
+        kinds.join(", "),
+        backend.lanes(),
+        lanes.join(", "),
+        st.materials.passes_per_packet(),
+        build.as_secs_f64(),
+        memory as f64 / 1e6,
+        (t_build - t_load).as_secs_f64(),
+        args.out.display(),
+    );
+    if st.nan > 0 {
+        eprintln!(
+            "coherent: warning: {} radiance samples were NaN (a bad material or light?); they were \
+             counted and set to 0",
+            st.nan
+        );
+    }
+    Ok(())
+}
+
+fn stop_text<S>(r: &coherent::film::Rendered<S>) -> String {
+    format!("{} passes, {:?}", r.passes.len(), r.stop)
+}

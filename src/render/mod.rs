@@ -1,0 +1,401 @@
+//! The coherent packet renderer (paper section 7, with sections 3-5 as its stages): a packet
+//! of camera rays goes to the accelerator's first-hit query, its hits become a shading
+//! context in SoA, each material present in the packet is evaluated under its mask (one
+//! material at a time), each light and light sample under its mask with a shadow packet
+//! through the occlusion query, and the mirror reflection and refraction packets (Fresnel,
+//! total internal reflection) are traced the same way to the scene's depth, each lane
+//! carrying its throughput. A stage never falls back to scalar code for one lane: finished
+//! lanes are masked, not branched around.
+//!
+//! Secondary packets keep the lanes of their parent packet (no regrouping across packets);
+//! see README.md for why.
+
+pub mod centres;
+pub mod rng;
+pub mod stats;
+pub mod surface;
+
+use coherent_accel::{Accel, Rays};
+use coherent_simd::{Lanes, Rgbs, SimdF32, SimdI32, SimdMask, Vec3s};
+
+use crate::bdf::Frames;
+use crate::camera::{CameraError, PinholeCamera};
+use crate::light::shadow_rays;
+use crate::material::{ShadeHits, Shading};
+use crate::scene::RenderScene;
+use crate::texture::lod_from_differentials;
+
+pub use stats::{LaneCount, RayKind, RenderStats};
+pub use surface::{Differentials, Geometry, Surface};
+
+/// The renderer of one scene with one accelerator, for one image size.
+pub struct Renderer<'s, A: Accel> {
+    scene: &'s RenderScene,
+    accel: A,
+    geometry: Geometry,
+    camera: PinholeCamera,
+    /// Per material: whether it transmits (its normal keeps its orientation so that rays
+    /// know whether they enter or leave), as a lane table.
+    transmissive: Vec<u32>,
+    /// Per material: index of refraction.
+    ior: Vec<f32>,
+    /// Reflection/refraction depth (0 = camera rays only).
+    pub depth: u32,
+}
+
+/// A packet of rays in flight with its per-lane state.
+#[derive(Clone, Copy)]
+struct Segment<L: Lanes> {
+    rays: Rays<L>,
+    diff: Differentials<L>,
+    active: L::Mask,
+    throughput: Rgbs<L>,
+    depth: u32,
+    kind: RayKind,
+    /// Which node of the ray tree this is (root 1, children 2k and 2k+1): random-number
+    /// streams hang off it.
+    path: u32,
+}
+
+impl<'s, A: Accel> Renderer<'s, A> {
+    /// The renderer of `scene` (validated) with a built accelerator over
+    /// `scene.accel_scene()`, for a `width` x `height` image.
+    pub fn new(
+        scene: &'s RenderScene,
+        accel: A,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, CameraError> {
+        let c = &scene.camera;
+        let camera = PinholeCamera::new(c.position, c.look_at, c.up, c.vfov_deg, width, height)?;
+        let transmissive = scene
+            .materials
+            .iter()
+            .map(|m| u32::from(m.optics.transmittance.iter().any(|&t| t > 0.0)))
+            .collect();
+        let ior = scene.materials.iter().map(|m| m.optics.ior).collect();
+        Ok(Self {
+            scene,
+            accel,
+            geometry: Geometry::new(scene),
+            camera,
+            transmissive,
+            ior,
+            depth: scene.depth,
+        })
+    }
+
+    /// The accelerator.
+    pub fn accel(&self) -> &A {
+        &self.accel
+    }
+
+    /// The camera.
+    pub fn camera(&self) -> &PinholeCamera {
+        &self.camera
+    }
+
+    /// Radiance through the image points `(xs, ys)` of the active lanes (inactive lanes give
+    /// zero); `ids` are the samples' ids (random numbers derive from them). NaN lanes are
+    /// counted in `stats.nan` and zeroed.
+    #[inline(always)]
+    pub fn trace_packet<L: Lanes>(
+        &self,
+        l: L,
+        xs: L::F32s,
+        ys: L::F32s,
+        ids: L::I32s,
+        active: L::Mask,
+        stats: &mut RenderStats,
+    ) -> Rgbs<L> {
+        stats.width = L::N as u32;
+        let cam = self.camera.rays(l, xs, ys);
+        let zero3 = Vec3s::splat(l, glam::Vec3::ZERO);
+        let mut seg = Segment {
+            rays: cam.rays,
+            diff: Differentials {
+                dorigin_dx: zero3,
+                dorigin_dy: zero3,
+                ddir_dx: cam.ddir_dx,
+                ddir_dy: cam.ddir_dy,
+            },
+            active,
+            throughput: Rgbs::splat(l, [1.0; 3]),
+            depth: 0,
+            kind: RayKind::Primary,
+            path: 1,
+        };
+        let mut radiance = Rgbs::zero(l);
+        // Depth-first over the ray tree; allocates only when a packet spawns children.
+        let mut pending: Vec<Segment<L>> = Vec::new();
+        loop {
+            self.segment(l, &seg, ids, &mut radiance, &mut pending, stats);
+            match pending.pop() {
+                Some(s) => seg = s,
+                None => break,
+            }
+        }
+        let nan = (radiance.r.is_nan() | radiance.g.is_nan() | radiance.b.is_nan()) & active;
+        if nan.any() {
+            stats.nan += u64::from(nan.count());
+            radiance = Rgbs::select(nan, Rgbs::zero(l), radiance);
+        }
+        Rgbs::select(active, radiance, Rgbs::zero(l))
+    }
+
+    /// Traces one packet: its hits are shaded and lit into `radiance`, its reflection and
+    /// refraction packets go to `pending`.
+    #[inline(always)]
+    fn segment<L: Lanes>(
+        &self,
+        l: L,
+        seg: &Segment<L>,
+        ids: L::I32s,
+        radiance: &mut Rgbs<L>,
+        pending: &mut Vec<Segment<L>>,
+        stats: &mut RenderStats,
+    ) {
+        let zero = l.splat(0.0);
+        let n_active = seg.active.count();
+        if n_active == 0 {
+            return;
+        }
+        stats.count(seg.kind, n_active);
+        stats.count_depth(seg.depth as usize, n_active);
+        let dir = seg.rays.dir;
+        let hits = self.accel.intersect(l, &seg.rays, seg.active);
+        let hit = hits.hit_mask(l) & seg.active;
+        let miss = seg.active.and_not(hit);
+
+        // Misses see the background and what the lights show of themselves (environment).
+        if miss.any() {
+            let mut bg = Rgbs::splat(l, self.scene.background);
+            for light in &self.scene.lights {
+                bg += light.radiance_seen(l, &dir);
+            }
+            *radiance += Rgbs::select(miss, seg.throughput * bg, Rgbs::zero(l));
+        }
+        if hit.none() {
+            return;
+        }
+
+        let surf = self
+            .geometry
+            .surface(l, &hits, &seg.rays.origin, &dir, &seg.diff);
+        let wo = -dir;
+        // Opaque surfaces are two-sided: their normals face the viewer. Transmissive ones
+        // keep their orientation (outward), so `wo` below tells a ray leaving the medium.
+        let transmissive = l
+            .gather_u32(&self.transmissive, surf.material.max(l.splat_i32(0)))
+            .eq(l.splat_i32(1));
+        let back = surf.ng.dot(wo).lt(zero);
+        let flip = back.and_not(transmissive);
+        let ns = Vec3s::select(flip, -surf.ns, surf.ns);
+        let ng = Vec3s::select(flip, -surf.ng, surf.ng);
+        let frames = Frames {
+            tangent: surf.tangent,
+            bitangent: ns.cross(surf.tangent),
+            normal: ns,
+        };
+        let mut ctx = ShadeHits {
+            active: hit,
+            material: surf.material,
+            frames,
+            wo,
+            s: surf.s,
+            t: surf.t,
+            lod: zero,
+        };
+
+        // The material pass without a light: mip levels, ambient term, reflection and
+        // refraction weights.
+        let base = self.shade_materials(l, &mut ctx, Some(&surf), &ns, stats);
+        let mut lit = Rgbs::select(hit, base.ambient, Rgbs::zero(l));
+
+        // Each light, each of its samples, under its mask, with a shadow packet.
+        let can_light = hit & ns.dot(wo).gt(zero);
+        if can_light.any() {
+            for (li, light) in self.scene.lights.iter().enumerate() {
+                for k in 0..light.samples() {
+                    let stream =
+                        rng::hash1(seg.path.wrapping_mul(0x9e37_79b1) ^ ((li as u32) << 20) ^ k);
+                    let u = [
+                        rng::uniform(l, ids, stream),
+                        rng::uniform(l, ids, stream ^ 0x5555_5555),
+                    ];
+                    let ls = light.sample(l, &surf.p, &ns, can_light, k, u);
+                    let on = ls.active & can_light;
+                    if on.none() {
+                        continue;
+                    }
+                    let shadow = shadow_rays(l, &surf.p, &ns, &ls);
+                    stats.count(RayKind::Shadow, on.count());
+                    let visible = on.and_not(self.accel.occluded(l, &shadow, on));
+                    if visible.none() {
+                        continue;
+                    }
+                    ctx.active = visible;
+                    let s = self.shade_materials(l, &mut ctx, None, &ls.wi, stats);
+                    lit += Rgbs::select(visible, s.reflected * ls.li, Rgbs::zero(l));
+                }
+            }
+        }
+        *radiance += seg.throughput * lit;
+
+        if seg.depth >= self.depth {
+            return;
+        }
+        let eps = (surf.p.x.abs().max(surf.p.y.abs()).max(surf.p.z.abs()) + 1.0) * 1e-4;
+        let positive = |c: Rgbs<L>| c.r.max(c.g).max(c.b).gt(zero);
+
+        // The mirror reflection packet.
+        let refl_on = hit & positive(base.reflection);
+        if refl_on.any() {
+            let r = dir - ns * (dir.dot(ns) * 2.0);
+            let side = ng.dot(r).lt(zero).select(-eps, eps);
+            let reflect = |d: Vec3s<L>| d - ns * (d.dot(ns) * 2.0);
+            pending.push(Segment {
+                rays: Rays {
+                    origin: ng.mul_add(side, surf.p),
+                    dir: r,
+                    tmin: zero,
+                    tmax: l.splat(f32::INFINITY),
+                },
+                diff: Differentials {
+                    dorigin_dx: surf.dp_dx,
+                    dorigin_dy: surf.dp_dy,
+                    ddir_dx: reflect(seg.diff.ddir_dx),
+                    ddir_dy: reflect(seg.diff.ddir_dy),
+                },
+                active: refl_on,
+                throughput: seg.throughput * base.reflection,
+                depth: seg.depth + 1,
+                kind: RayKind::Reflection,
+                path: seg.path.wrapping_mul(2),
+            });
+        }
+
+        // The refraction packet (Snell's law; lanes past the critical angle are dropped:
+        // their energy went to the reflection weight through the Fresnel factor).
+        let refr_on = hit & positive(base.refraction);
+        if refr_on.any() {
+            let ior = l.gather(&self.ior, surf.material.max(l.splat_i32(0)));
+            let (t_dir, inv_eta, tir) = refract(l, &dir, &ns, ior);
+            let on = refr_on.and_not(tir);
+            if on.any() {
+                let side = ng.dot(t_dir).lt(zero).select(-eps, eps);
+                pending.push(Segment {
+                    rays: Rays {
+                        origin: ng.mul_add(side, surf.p),
+                        dir: t_dir,
+                        tmin: zero,
+                        tmax: l.splat(f32::INFINITY),
+                    },
+                    diff: Differentials {
+                        dorigin_dx: surf.dp_dx,
+                        dorigin_dy: surf.dp_dy,
+                        ddir_dx: seg.diff.ddir_dx * inv_eta,
+                        ddir_dy: seg.diff.ddir_dy * inv_eta,
+                    },
+                    active: on,
+                    throughput: seg.throughput * base.refraction,
+                    depth: seg.depth + 1,
+                    kind: RayKind::Refraction,
+                    path: seg.path.wrapping_mul(2) | 1,
+                });
+            }
+        }
+    }
+
+    /// Shades the active lanes of `ctx` one material at a time (the paper's passes, counted
+    /// in `stats.materials`). With `surf` (the pass without a light), each material's mip
+    /// level is found from the texture-coordinate differentials and stored in `ctx.lod` for
+    /// the light passes.
+    #[inline(always)]
+    fn shade_materials<L: Lanes>(
+        &self,
+        l: L,
+        ctx: &mut ShadeHits<L>,
+        surf: Option<&Surface<L>>,
+        wi: &Vec3s<L>,
+        stats: &mut RenderStats,
+    ) -> Shading<L> {
+        let mut out = Shading::zero(l);
+        let mut todo = ctx.active;
+        if todo.any() {
+            stats.materials.packets += 1;
+        }
+        while todo.any() {
+            let id = ctx.material.lane(todo.bitmask().trailing_zeros() as usize);
+            let mine = todo & ctx.material.eq(l.splat_i32(id));
+            let m = &self.scene.materials[id as usize];
+            if let (Some(surf), Some(tex)) = (surf, &m.texture) {
+                let levels = tex.levels();
+                let lod = lod_from_differentials(
+                    l,
+                    surf.ds_dx,
+                    surf.dt_dx,
+                    surf.ds_dy,
+                    surf.dt_dy,
+                    levels[0].width,
+                    levels[0].height,
+                    levels.len() - 1,
+                );
+                ctx.lod = mine.select(lod, ctx.lod);
+            }
+            let s = m.shade(l, ctx, wi);
+            out = Shading::select(mine, s, out);
+            todo = todo.and_not(mine);
+            stats.materials.passes += 1;
+        }
+        out
+    }
+}
+
+/// Refracts unit directions `dir` at surfaces with unit outward normals `n` into a medium of
+/// relative index `ior` (inside over outside); a ray with `dir . n > 0` leaves the medium and
+/// sees `1 / ior`. Returns the unit refracted directions, the ratio of indices
+/// `n_from / n_to` per lane, and the lanes past the critical angle (total internal
+/// reflection; their direction is meaningless).
+#[inline(always)]
+pub fn refract<L: Lanes>(
+    l: L,
+    dir: &Vec3s<L>,
+    n: &Vec3s<L>,
+    ior: L::F32s,
+) -> (Vec3s<L>, L::F32s, L::Mask) {
+    let zero = l.splat(0.0);
+    let one = l.splat(1.0);
+    let cos_in = -dir.dot(*n);
+    let entering = cos_in.gt(zero);
+    let eta = entering.select(ior, one / ior);
+    let n_in = Vec3s::select(entering, *n, -*n);
+    let cos_i = cos_in.abs();
+    let inv_eta = one / eta;
+    let sin2_t = (one - cos_i * cos_i) * inv_eta * inv_eta;
+    let tir = sin2_t.ge(one);
+    let cos_t = (one - sin2_t).max(zero).sqrt();
+    let t_dir = *dir * inv_eta + n_in * (cos_i * inv_eta - cos_t);
+    (t_dir, inv_eta, tir)
+}
+
+impl<A: Accel> crate::film::SampleTracer for Renderer<'_, A> {
+    type Stats = RenderStats;
+
+    fn merge_stats(into: &mut RenderStats, from: RenderStats) {
+        into.merge(from);
+    }
+
+    #[inline(always)]
+    fn trace<L: Lanes>(
+        &self,
+        l: L,
+        xs: L::F32s,
+        ys: L::F32s,
+        ids: L::I32s,
+        active: L::Mask,
+        stats: &mut RenderStats,
+    ) -> Rgbs<L> {
+        self.trace_packet(l, xs, ys, ids, active, stats)
+    }
+}

@@ -1,0 +1,497 @@
+//! The packet renderer against closed forms (paper section 7's renderer, sections 3-5 as its
+//! stages): a Lambertian plane under an omni light per pixel, a mirror reflecting a known
+//! pattern, a glass slab shifting rays by Snell's law, total internal reflection past the
+//! critical angle; and the same image on every lane backend and accelerator.
+//! Small images: the whole file runs in seconds.
+
+use coherent::accel::{Accel, AccelError};
+use coherent::accel::{Instance, Mesh};
+use coherent::accel_any::{AccelKind, AnyAccel, AnyParams};
+use coherent::light::Light;
+use coherent::material::Material;
+use coherent::render::centres::{psnr, render_centres};
+use coherent::render::{RayKind, Renderer, refract};
+use coherent::scene::{Camera, RenderScene, ShadedMesh};
+use coherent::simd::scalar::Scalar;
+use coherent::simd::{Backend, SimdMask, Vec3s};
+use glam::{DVec3, Vec3};
+
+const W: u32 = 32;
+const H: u32 = 24;
+
+/// A scene of `meshes` (identity instances) on top of a built-in scene's settings.
+fn scene(
+    meshes: Vec<ShadedMesh>,
+    materials: Vec<Material>,
+    lights: Vec<Light>,
+    camera: Camera,
+    depth: u32,
+) -> RenderScene {
+    let mut s = coherent::scene::load("cornell").unwrap();
+    s.instances = (0..meshes.len()).map(Instance::identity).collect();
+    s.meshes = meshes;
+    s.materials = materials;
+    s.lights = lights;
+    s.camera = camera;
+    s.depth = depth;
+    s.background = [0.0; 3];
+    s.motion.clear();
+    s.validate().unwrap();
+    s
+}
+
+/// A quad `a b c d` (counter-clockwise seen from where its normal points) as one mesh.
+fn quad(name: &str, p: [Vec3; 4], material: u32) -> ShadedMesh {
+    ShadedMesh::flat(
+        Mesh::new(name, p.to_vec(), vec![[0, 1, 2], [0, 2, 3]]),
+        material,
+    )
+}
+
+/// A material that only shows its ambient colour (no light needed).
+fn emissive(name: &str, c: [f32; 3]) -> Material {
+    let mut m = Material::phong(name, [0.0; 3], [0.0; 3], 0.0);
+    m.phong.ambient = c;
+    m
+}
+
+fn omni(position: Vec3, intensity: [f32; 3]) -> Light {
+    Light::Omni(coherent::light::Omni::new(position, intensity).unwrap())
+}
+
+fn render(s: &RenderScene, backend: Backend, kind: AccelKind) -> Option<Vec<[f32; 3]>> {
+    let accel = match AnyAccel::build(&s.accel_scene(), &AnyParams::of(kind)) {
+        Ok(a) => a,
+        Err(AccelError::Unavailable { reason, .. }) => {
+            eprintln!("skipping accelerator {kind}: {reason}");
+            return None;
+        }
+        Err(e) => panic!("{kind}: {e}"),
+    };
+    let r = Renderer::new(s, accel, W, H).unwrap();
+    let (img, stats) = render_centres(&r, backend, W, H).unwrap();
+    assert_eq!(stats.nan, 0);
+    assert_eq!(stats.rays(RayKind::Primary), u64::from(W * H));
+    Some(img)
+}
+
+fn scalar_bsp(s: &RenderScene) -> Vec<[f32; 3]> {
+    render(s, Backend::Scalar, AccelKind::Bsp).unwrap()
+}
+
+/// The camera's unit direction through the centre of pixel (x, y), in f64.
+fn pixel_dir(c: &Camera, x: u32, y: u32) -> DVec3 {
+    let cam = coherent::camera::PinholeCamera::new(c.position, c.look_at, c.up, c.vfov_deg, W, H)
+        .unwrap();
+    cam.direction1(x as f32 + 0.5, y as f32 + 0.5).as_dvec3()
+}
+
+#[test]
+fn lambertian_plane_under_an_omni_light_matches_the_closed_form() {
+    let kd = [0.8, 0.5, 0.2];
+    let s = 10.0;
+    let plane = quad(
+        "floor",
+        [
+            Vec3::new(-s, -s, 0.0),
+            Vec3::new(s, -s, 0.0),
+            Vec3::new(s, s, 0.0),
+            Vec3::new(-s, s, 0.0),
+        ],
+        0,
+    );
+    let light = Vec3::new(0.5, -0.3, 2.0);
+    let intensity = [3.0, 2.0, 1.0];
+    let camera = Camera {
+        position: Vec3::new(0.0, -3.0, 4.0),
+        look_at: Vec3::ZERO,
+        up: Vec3::Z,
+        vfov_deg: 50.0,
+    };
+    let sc = scene(
+        vec![plane],
+        vec![Material::phong("lambert", kd, [0.0; 3], 0.0)],
+        vec![omni(light, intensity)],
+        camera,
+        0,
+    );
+    let img = scalar_bsp(&sc);
+    for y in 0..H {
+        for x in 0..W {
+            let d = pixel_dir(&camera, x, y);
+            let o = camera.position.as_dvec3();
+            let p = o + d * (-o.z / d.z);
+            let to = light.as_dvec3() - p;
+            let dist2 = to.length_squared();
+            let cos = to.z / dist2.sqrt();
+            for c in 0..3 {
+                let want =
+                    f64::from(kd[c]) / std::f64::consts::PI * f64::from(intensity[c]) * cos / dist2;
+                let got = f64::from(img[(y * W + x) as usize][c]);
+                assert!(
+                    (got - want).abs() <= 2e-3 * want + 1e-6,
+                    "pixel ({x}, {y}) channel {c}: {got} vs {want}"
+                );
+            }
+        }
+    }
+}
+
+/// A mirror floor (z = 0) and a wall at y = 6, red for x < 0 and green for x > 0.
+fn mirror_scene() -> RenderScene {
+    let s = 10.0;
+    let mut mirror = Material::phong("mirror", [0.0; 3], [0.0; 3], 0.0);
+    mirror.optics.reflectance = [1.0; 3];
+    let floor = quad(
+        "mirror",
+        [
+            Vec3::new(-s, -s, 0.0),
+            Vec3::new(s, -s, 0.0),
+            Vec3::new(s, s, 0.0),
+            Vec3::new(-s, s, 0.0),
+        ],
+        0,
+    );
+    let left = quad(
+        "left",
+        [
+            Vec3::new(-s, 6.0, 0.0),
+            Vec3::new(0.0, 6.0, 0.0),
+            Vec3::new(0.0, 6.0, s),
+            Vec3::new(-s, 6.0, s),
+        ],
+        1,
+    );
+    let right = quad(
+        "right",
+        [
+            Vec3::new(0.0, 6.0, 0.0),
+            Vec3::new(s, 6.0, 0.0),
+            Vec3::new(s, 6.0, s),
+            Vec3::new(0.0, 6.0, s),
+        ],
+        2,
+    );
+    scene(
+        vec![floor, left, right],
+        vec![
+            mirror,
+            emissive("red", [1.0, 0.0, 0.0]),
+            emissive("green", [0.0, 1.0, 0.0]),
+        ],
+        vec![],
+        Camera {
+            position: Vec3::new(0.3, -4.0, 3.0),
+            look_at: Vec3::new(0.0, 2.0, 0.5),
+            up: Vec3::Z,
+            vfov_deg: 60.0,
+        },
+        1,
+    )
+}
+
+#[test]
+fn a_mirror_reflects_a_known_pattern() {
+    let sc = mirror_scene();
+    let img = scalar_bsp(&sc);
+    let o = sc.camera.position.as_dvec3();
+    let (mut seen_reflected, mut seen_direct) = (0, 0);
+    for y in 0..H {
+        for x in 0..W {
+            let mut d = pixel_dir(&sc.camera, x, y);
+            let t_wall = (6.0 - o.y) / d.y;
+            let t_floor = if d.z < 0.0 { -o.z / d.z } else { f64::INFINITY };
+            let wall_hit = if t_floor < t_wall {
+                // Off the mirror: reflect about z and go on to the wall.
+                let p = o + d * t_floor;
+                d.z = -d.z;
+                seen_reflected += 1;
+                p + d * ((6.0 - p.y) / d.y)
+            } else {
+                seen_direct += 1;
+                o + d * t_wall
+            };
+            if wall_hit.x.abs() < 0.05 || wall_hit.z > 10.0 || wall_hit.x.abs() > 10.0 {
+                continue; // too close to the edge, or off the wall
+            }
+            let want = if wall_hit.x < 0.0 {
+                [1.0, 0.0, 0.0]
+            } else {
+                [0.0, 1.0, 0.0]
+            };
+            assert_eq!(img[(y * W + x) as usize], want, "pixel ({x}, {y})");
+        }
+    }
+    assert!(seen_reflected > 100 && seen_direct > 10);
+    // Depth 0 sees no reflection: the mirror is black there.
+    let mut flat = sc.clone();
+    flat.depth = 0;
+    let img0 = scalar_bsp(&flat);
+    assert_eq!(img0[((H - 1) * W + W / 2) as usize], [0.0; 3]);
+}
+
+/// A glass slab between z = -1 and z = 0 above a floor at z = -3, red for x < 0, green for
+/// x > 0. Camera rays pass the slab and are shifted sideways.
+fn slab_scene(ior: f32) -> RenderScene {
+    let s = 20.0;
+    let mut glass = Material::phong("glass", [0.0; 3], [0.0; 3], 0.0);
+    glass.optics.transmittance = [1.0; 3];
+    glass.optics.ior = ior;
+    let top = quad(
+        "top",
+        [
+            Vec3::new(-s, -s, 0.0),
+            Vec3::new(s, -s, 0.0),
+            Vec3::new(s, s, 0.0),
+            Vec3::new(-s, s, 0.0),
+        ],
+        0,
+    );
+    // Seen from below (outward normal -z).
+    let bottom = quad(
+        "bottom",
+        [
+            Vec3::new(-s, -s, -1.0),
+            Vec3::new(-s, s, -1.0),
+            Vec3::new(s, s, -1.0),
+            Vec3::new(s, -s, -1.0),
+        ],
+        0,
+    );
+    let left = quad(
+        "left",
+        [
+            Vec3::new(-s, -s, -3.0),
+            Vec3::new(0.0, -s, -3.0),
+            Vec3::new(0.0, s, -3.0),
+            Vec3::new(-s, s, -3.0),
+        ],
+        1,
+    );
+    let right = quad(
+        "right",
+        [
+            Vec3::new(0.0, -s, -3.0),
+            Vec3::new(s, -s, -3.0),
+            Vec3::new(s, s, -3.0),
+            Vec3::new(0.0, s, -3.0),
+        ],
+        2,
+    );
+    scene(
+        vec![top, bottom, left, right],
+        vec![
+            glass,
+            emissive("red", [1.0, 0.0, 0.0]),
+            emissive("green", [0.0, 1.0, 0.0]),
+        ],
+        vec![],
+        Camera {
+            position: Vec3::new(-3.0, 0.0, 3.0),
+            look_at: Vec3::new(0.0, 0.0, -3.0),
+            up: Vec3::Z,
+            vfov_deg: 40.0,
+        },
+        2,
+    )
+}
+
+/// Refracts unit `d` at a plane with unit normal `n` facing the incoming ray, from index
+/// 1 into `eta` (f64 Snell's law).
+fn snell(d: DVec3, n: DVec3, eta: f64) -> DVec3 {
+    let cos_i = -d.dot(n);
+    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
+    d / eta + n * (cos_i / eta - (1.0 - sin2_t).sqrt())
+}
+
+#[test]
+fn a_glass_slab_shifts_rays_by_the_known_offset() {
+    let ior = 1.5f64;
+    let sc = slab_scene(ior as f32);
+    let img = scalar_bsp(&sc);
+    let o = sc.camera.position.as_dvec3();
+    let mut shifted_decides = 0;
+    for y in 0..H {
+        for x in 0..W {
+            let d = pixel_dir(&sc.camera, x, y);
+            // Straight to the top face, refract in, to the bottom face, refract out.
+            let p0 = o + d * (-o.z / d.z);
+            let d1 = snell(d, DVec3::Z, ior);
+            let p1 = p0 + d1 * ((-1.0 - p0.z) / d1.z);
+            let d2 = snell(d1, DVec3::Z, 1.0 / ior);
+            let p2 = p1 + d2 * ((-3.0 - p1.z) / d2.z);
+            // The closed form of the lateral offset (thickness 1).
+            let sin_i = (1.0 - d.z * d.z).sqrt();
+            let cos_i = -d.z;
+            let shift = sin_i * (1.0 - cos_i / (ior * ior - sin_i * sin_i).sqrt());
+            let straight = o + d * ((-3.0 - o.z) / d.z);
+            // Perpendicular offset between the parallel in/out rays equals `shift`.
+            let perp = (p2 - straight) - d * (p2 - straight).dot(d);
+            assert!(
+                (perp.length() - shift).abs() < 1e-6,
+                "{} vs {shift}",
+                perp.length()
+            );
+            if p2.x.abs() < 0.05 {
+                continue;
+            }
+            let want = if p2.x < 0.0 {
+                [1.0, 0.0, 0.0]
+            } else {
+                [0.0, 1.0, 0.0]
+            };
+            if (p2.x < 0.0) != (straight.x < 0.0) {
+                shifted_decides += 1;
+            }
+            assert_eq!(img[(y * W + x) as usize], want, "pixel ({x}, {y})");
+        }
+    }
+    assert!(
+        shifted_decides > 10,
+        "too few pixels tell the shifted from the straight ray: {shifted_decides}"
+    );
+}
+
+#[test]
+fn total_internal_reflection_starts_at_the_critical_angle() {
+    let l = Scalar;
+    let ior = 1.5f32;
+    let critical = (1.0 / ior).asin();
+    let n = Vec3s::splat(l, Vec3::Z);
+    for k in -20..=20 {
+        let a = critical + k as f32 * 0.01;
+        if k == 0 || !(0.0..std::f32::consts::FRAC_PI_2).contains(&a) {
+            continue;
+        }
+        // Inside the glass going up (leaving through the +z face).
+        let d = Vec3::new(a.sin(), 0.0, a.cos());
+        let (t, _, tir) = refract(l, &Vec3s::splat(l, d), &n, ior);
+        assert_eq!(tir.any(), k > 0, "angle {a} (critical {critical})");
+        if k < 0 {
+            let t = t.lane(0);
+            // Snell: sin out = ior sin in.
+            assert!((t.x - ior * a.sin()).abs() < 1e-5, "{t}");
+            assert!((t.length() - 1.0).abs() < 1e-5);
+        }
+        // The Fresnel factor is 1 there: all the light is reflected.
+        let f = coherent::material::fresnel_dielectric(l, a.cos(), 1.0 / ior);
+        if k > 0 {
+            assert_eq!(f, 1.0);
+        } else {
+            assert!(f < 1.0);
+        }
+    }
+}
+
+/// A lit, textured, reflective and refractive scene: the built-in room with an omni light,
+/// a textured floor and depth 2.
+fn lit_scenes() -> Vec<RenderScene> {
+    let mut out: Vec<RenderScene> = coherent::scene::builtin_names()
+        .iter()
+        .map(|(n, _)| coherent::scene::load(n).unwrap())
+        .collect();
+    out.push(mirror_scene());
+    out.push(slab_scene(1.5));
+    for s in &mut out {
+        if s.lights.is_empty() {
+            let c = s.camera.position;
+            s.lights
+                .push(omni(c + Vec3::new(0.7, 0.9, -0.5), [4.0, 4.0, 4.0]));
+        }
+    }
+    // A textured Phong floor under the light.
+    let mut tex = Material::phong("textured", [0.7; 3], [0.3; 3], 20.0);
+    tex.texture = Some(std::sync::Arc::new(
+        coherent::texture::workload::pattern_texture(64),
+    ));
+    let m = out[0].materials.len() as u32;
+    let floor = quad(
+        "textured floor",
+        [
+            Vec3::new(-1.0, 0.001, 1.0),
+            Vec3::new(1.0, 0.001, 1.0),
+            Vec3::new(1.0, 0.001, -1.0),
+            Vec3::new(-1.0, 0.001, -1.0),
+        ],
+        m,
+    )
+    .with_uvs(vec![
+        glam::Vec2::new(0.0, 0.0),
+        glam::Vec2::new(4.0, 0.0),
+        glam::Vec2::new(4.0, 4.0),
+        glam::Vec2::new(0.0, 4.0),
+    ]);
+    let s0 = &mut out[0];
+    s0.materials.push(tex);
+    s0.instances.push(Instance::identity(s0.meshes.len()));
+    s0.meshes.push(floor);
+    s0.validate().unwrap();
+    out
+}
+
+#[test]
+fn every_backend_and_accelerator_renders_the_scalar_bsp_image() {
+    for sc in &lit_scenes() {
+        let reference = scalar_bsp(sc);
+        let peak = reference
+            .iter()
+            .flat_map(|c| c.iter().copied())
+            .fold(0.0f32, f32::max)
+            .max(1e-3);
+        assert!(peak > 0.01, "{}: the image is black", sc.name);
+        for backend in Backend::ALL {
+            if let Some(why) = backend.unavailable_reason() {
+                eprintln!("skipping backend {}: {why}", backend.name());
+                continue;
+            }
+            for kind in AccelKind::ALL {
+                if kind == AccelKind::Brute && sc.triangles() > 2_000 {
+                    continue; // brute force is for the small scenes
+                }
+                if !kind.compiled() {
+                    eprintln!("skipping accelerator {kind}: not compiled in");
+                    continue;
+                }
+                let Some(img) = render(sc, backend, kind) else {
+                    continue;
+                };
+                let db = psnr(&img, &reference, peak);
+                assert!(
+                    db >= 40.0,
+                    "{}: {} + {kind}: PSNR {db:.1} dB against scalar + bsp",
+                    sc.name,
+                    backend.name()
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn the_thread_count_does_not_change_the_image() {
+    use coherent::film::{FilmOptions, Method, render};
+    let sc = &lit_scenes()[0];
+    let accel = AnyAccel::build(&sc.accel_scene(), &AnyParams::of(AccelKind::Bsp)).unwrap();
+    let r = Renderer::new(sc, accel, W, H).unwrap();
+    let backend = Backend::available()
+        .into_iter()
+        .max_by_key(|b| b.lanes())
+        .unwrap();
+    let opts = FilmOptions::new(W, H, Method::Uniform { spp: 2 });
+    let mut images = Vec::new();
+    for threads in [1, 3] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let out = pool
+            .install(|| render(backend, &r, &opts, &|_| {}))
+            .unwrap();
+        assert!(out.stats.rays(RayKind::Shadow) > 0);
+        images.push(out.image());
+    }
+    assert!(
+        images[0] == images[1],
+        "1 and 3 threads gave different images"
+    );
+}
