@@ -109,18 +109,31 @@ pub fn shadow_rays<A: Accel>(accel: &A, scene: &Scene, primary: &[Ray1], light: 
 
 /// Diffuse rays from the primary hits (in order; misses give none), cosine-distributed over
 /// the hemisphere of the geometric normal.
+///
+/// Each ray's random numbers are seeded by its primary ray (its direction's bits, one per
+/// pixel) and `seed`, not drawn from one stream in list order: the same pixel gets the same
+/// diffuse ray whatever order the primary rays come in, so workloads ordered for different
+/// packet widths hold the same rays.
 pub fn diffuse_rays<A: Accel>(accel: &A, scene: &Scene, primary: &[Ray1], seed: u64) -> Vec<Ray1> {
-    let mut rng = Rng::new(seed);
     primary
         .iter()
         .filter_map(|r| {
             let h = accel.intersect1(r)?;
             let (p, n) = hit_frame(scene, r, &h);
+            let mut rng = Rng::new(pixel_seed(seed, r));
             // Cosine-weighted: a point on the unit sphere around the normal's tip.
             let d = (n + rng.unit_vector()).normalize_or(n);
             Some(Ray1::infinite(offset(p, n), d))
         })
         .collect()
+}
+
+/// A seed from `seed` and the bits of a primary ray's direction (distinct per pixel).
+fn pixel_seed(seed: u64, r: &Ray1) -> u64 {
+    let mut k = Rng::new(seed ^ u64::from(r.dir.x.to_bits()));
+    let mut k = Rng::new(k.next_u64() ^ u64::from(r.dir.y.to_bits()));
+    let mut k = Rng::new(k.next_u64() ^ u64::from(r.dir.z.to_bits()));
+    k.next_u64()
 }
 
 /// What the timers measure.
