@@ -262,3 +262,36 @@ impl<A: Accel> Kernel for TimePackets<'_, A> {
         best
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::BruteForce;
+    use crate::scenes::{SceneSize, room};
+
+    /// Every packet width's workload holds the same rays, in its own tile order.
+    #[test]
+    fn every_tile_order_gives_the_same_diffuse_rays() {
+        let s = room(SceneSize::Quick);
+        let accel = BruteForce::build(&s.scene, &()).unwrap();
+        let key = |r: &Ray1| {
+            [r.origin, r.dir]
+                .map(|v| v.to_array().map(f32::to_bits))
+                .concat()
+        };
+        let sorted = |lanes: usize| {
+            let primary = primary_rays(&s.view, 16, 8, tile_shape(lanes));
+            let mut v: Vec<_> = diffuse_rays(&accel, &s.scene, &primary, 7)
+                .iter()
+                .map(key)
+                .collect();
+            v.sort_unstable();
+            v
+        };
+        let one = sorted(1);
+        assert!(!one.is_empty());
+        for lanes in [4, 8, 16] {
+            assert_eq!(sorted(lanes), one, "width {lanes}");
+        }
+    }
+}
