@@ -152,6 +152,7 @@ impl Bsp {
         let mut q = AnyP {
             tmax: rays.tmax,
             occluded: l.splat_mask(false),
+            active: active & rays.valid(l),
             neg_inf: l.splat(f32::NEG_INFINITY),
         };
         crate::walk::scene_packet(l, self, rays, active, &mut q, c);

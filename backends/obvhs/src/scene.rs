@@ -62,6 +62,9 @@ pub struct Obvhs {
     bounds: coherent_accel::Aabb,
     params: ObvhsParams,
     stats: BuildStats,
+    /// One instance with the identity transform: rays go straight into its mesh's tree, with
+    /// no top level (the BSP and Embree skip it likewise).
+    direct: Option<usize>,
 }
 
 /// The non-degenerate triangles of a (validated) mesh, as obvhs triangles, with their
@@ -140,6 +143,7 @@ impl Obvhs {
             bounds: coherent_accel::Aabb::EMPTY,
             params: *params,
             stats,
+            direct: None,
         };
         o.place(&scene.instances, object_from_world);
         o.stats.build_seconds = start.elapsed().as_secs_f64();
@@ -179,6 +183,10 @@ impl Obvhs {
             coherent_accel::Aabb::new(world.min - margin, world.max + margin)
         };
         self.top = Tree::over_boxes(self.params.kind, &boxes, self.params.top_preset);
+        self.direct = match instances {
+            [one] if one.world_from_object == Affine3A::IDENTITY => Some(one.mesh),
+            _ => None,
+        };
         self.stats.instances = instances.len();
         self.stats.top_build_seconds = start.elapsed().as_secs_f64();
     }
@@ -229,6 +237,20 @@ impl Obvhs {
         }
         let (r, shift) = r.forward(&self.bounds)?;
         let world = world_ray(&r);
+        if let Some(m) = self.direct {
+            let mesh = &self.meshes[m];
+            let (k, t) = mesh
+                .tree
+                .closest(world, |lr, t| hit_t(&mesh.tris[t as usize], lr))?;
+            let (u, v) = barycentrics(&mesh.tris[k as usize], &world);
+            return Some(Hit1 {
+                t: t + shift,
+                u,
+                v,
+                prim: mesh.prims[k as usize],
+                inst: 0,
+            });
+        }
         let mut best: Option<(u32, u32, Ray)> = None;
         let found = self.top.closest(world, |ray, i| {
             let i = self.top_ids[i as usize];
@@ -267,6 +289,12 @@ impl Obvhs {
             return false;
         };
         let world = world_ray(&r);
+        if let Some(m) = self.direct {
+            let mesh = &self.meshes[m];
+            return mesh
+                .tree
+                .any(world, |lr, t| hit_t(&mesh.tris[t as usize], lr));
+        }
         self.top.any(world, |ray, i| {
             let i = self.top_ids[i as usize];
             let inst = &self.instances[i as usize];
@@ -294,6 +322,25 @@ impl Obvhs {
         };
         let world = world_ray(&r);
         let mut seen: Vec<(u32, u32)> = Vec::new();
+        if let Some(m) = self.direct {
+            let mesh = &self.meshes[m];
+            mesh.tree.each(world, |lr, k| {
+                let tri = &mesh.tris[k as usize];
+                let t = hit_t(tri, lr);
+                if t.is_finite() && !seen.contains(&(0, k)) {
+                    seen.push((0, k));
+                    let (u, v) = barycentrics(tri, lr);
+                    f(Hit1 {
+                        t: t + shift,
+                        u,
+                        v,
+                        prim: mesh.prims[k as usize],
+                        inst: 0,
+                    });
+                }
+            });
+            return;
+        }
         self.top.each(world, |ray, i| {
             let i = self.top_ids[i as usize];
             let inst = &self.instances[i as usize];
