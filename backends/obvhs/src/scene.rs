@@ -95,6 +95,23 @@ fn world_box(mesh: &Mesh, inst: &Placed) -> Aabb {
     b
 }
 
+/// Counts triangle tests (`()` counts nothing).
+trait TestCount {
+    fn tri(&self);
+}
+
+impl TestCount for () {
+    #[inline(always)]
+    fn tri(&self) {}
+}
+
+impl TestCount for core::cell::Cell<u64> {
+    #[inline(always)]
+    fn tri(&self) {
+        self.set(self.get() + 1);
+    }
+}
+
 /// Distance to `tri` along `ray` within `[tmin, tmax]`, or infinity (obvhs' Möller-Trumbore).
 #[inline(always)]
 fn hit_t(tri: &Triangle, ray: &Ray) -> f32 {
@@ -232,6 +249,23 @@ impl Obvhs {
 
     /// First hit of one ray.
     pub(crate) fn first_hit1(&self, r: &Ray1) -> Option<Hit1> {
+        self.first_hit1_c(r, &())
+    }
+
+    /// Triangle tests one ray's first-hit (or, with `occlusion`, any-hit) query makes: the
+    /// BVH's side of the traversal counters the `accel` experiment reports beside the BSP's.
+    pub fn triangle_tests1(&self, r: &Ray1, occlusion: bool) -> u64 {
+        let c = core::cell::Cell::new(0);
+        if occlusion {
+            self.any_hit1_c(r, &c);
+        } else {
+            self.first_hit1_c(r, &c);
+        }
+        c.get()
+    }
+
+    #[inline(always)]
+    fn first_hit1_c(&self, r: &Ray1, c: &impl TestCount) -> Option<Hit1> {
         if !r.is_valid() {
             return None;
         }
@@ -239,9 +273,10 @@ impl Obvhs {
         let world = world_ray(&r);
         if let Some(m) = self.direct {
             let mesh = &self.meshes[m];
-            let (k, t) = mesh
-                .tree
-                .closest(world, |lr, t| hit_t(&mesh.tris[t as usize], lr))?;
+            let (k, t) = mesh.tree.closest(world, |lr, t| {
+                c.tri();
+                hit_t(&mesh.tris[t as usize], lr)
+            })?;
             let (u, v) = barycentrics(&mesh.tris[k as usize], &world);
             return Some(Hit1 {
                 t: t + shift,
@@ -257,10 +292,10 @@ impl Obvhs {
             let inst = &self.instances[i as usize];
             let mesh = &self.meshes[inst.mesh];
             let local = self.object_ray(inst, ray, ray.tmax);
-            match mesh
-                .tree
-                .closest(local, |lr, t| hit_t(&mesh.tris[t as usize], lr))
-            {
+            match mesh.tree.closest(local, |lr, t| {
+                c.tri();
+                hit_t(&mesh.tris[t as usize], lr)
+            }) {
                 Some((prim, t)) if t < ray.tmax => {
                     best = Some((i, prim, local));
                     t
@@ -282,6 +317,11 @@ impl Obvhs {
 
     /// Whether anything lies on the ray's segment.
     pub(crate) fn any_hit1(&self, r: &Ray1) -> bool {
+        self.any_hit1_c(r, &())
+    }
+
+    #[inline(always)]
+    fn any_hit1_c(&self, r: &Ray1, c: &impl TestCount) -> bool {
         if !r.is_valid() {
             return false;
         }
@@ -291,19 +331,20 @@ impl Obvhs {
         let world = world_ray(&r);
         if let Some(m) = self.direct {
             let mesh = &self.meshes[m];
-            return mesh
-                .tree
-                .any(world, |lr, t| hit_t(&mesh.tris[t as usize], lr));
+            return mesh.tree.any(world, |lr, t| {
+                c.tri();
+                hit_t(&mesh.tris[t as usize], lr)
+            });
         }
         self.top.any(world, |ray, i| {
             let i = self.top_ids[i as usize];
             let inst = &self.instances[i as usize];
             let mesh = &self.meshes[inst.mesh];
             let local = self.object_ray(inst, ray, ray.tmax);
-            if mesh
-                .tree
-                .any(local, |lr, t| hit_t(&mesh.tris[t as usize], lr))
-            {
+            if mesh.tree.any(local, |lr, t| {
+                c.tri();
+                hit_t(&mesh.tris[t as usize], lr)
+            }) {
                 0.0
             } else {
                 f32::INFINITY
