@@ -142,8 +142,10 @@ pub enum Clock {
     /// Wall-clock time.
     #[default]
     Wall,
-    /// CPU time of the calling thread (Linux: `/proc/thread-self/schedstat`; elsewhere wall
-    /// time): time-slicing by other processes on a shared machine does not count.
+    /// CPU time of the calling thread (`clock_gettime(CLOCK_THREAD_CPUTIME_ID)`, nanosecond
+    /// resolution; elsewhere wall time): time-slicing by other processes on a shared machine
+    /// does not count. (`/proc/thread-self/schedstat`, used before, advanced in scheduler
+    /// ticks on the dev machine: passes of a few ms read as 0 or one tick.)
     ThreadCpu,
 }
 
@@ -154,12 +156,26 @@ impl Clock {
         let wall = || ORIGIN.get_or_init(Instant::now).elapsed().as_secs_f64();
         match self {
             Clock::Wall => wall(),
-            Clock::ThreadCpu => std::fs::read_to_string("/proc/thread-self/schedstat")
-                .ok()
-                .and_then(|s| s.split_whitespace().next()?.parse::<u64>().ok())
-                .map_or_else(wall, |ns| ns as f64 * 1e-9),
+            Clock::ThreadCpu => thread_cpu_seconds().unwrap_or_else(wall),
         }
     }
+}
+
+/// The calling thread's CPU time, in seconds.
+#[cfg(unix)]
+fn thread_cpu_seconds() -> Option<f64> {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: a valid clock id and a pointer to a timespec we own.
+    let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    (rc == 0).then(|| ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9)
+}
+
+#[cfg(not(unix))]
+fn thread_cpu_seconds() -> Option<f64> {
+    None
 }
 
 /// What a timed pass found: rays that hit (or were occluded), and the sum of their `t`
