@@ -402,6 +402,7 @@ fn scene_list(ctx: &mut Ctx, size: SceneSize) -> Vec<BuiltinScene> {
     list
 }
 
+#[allow(clippy::single_match)] // matches over `Built`, whose other variants come and go with features
 fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     let size = ctx.pick(SceneSize::Quick, SceneSize::Full);
     let (w, h) = ctx.pick((256, 192), (1024, 768));
@@ -721,6 +722,7 @@ fn record_embree(ctx: &mut Ctx) {
         return;
     }
     let native = ctx.machine.rustflags.contains("target-cpu=native");
+    #[cfg_attr(not(feature = "embree"), allow(unused_mut))]
     let mut extra = vec![format!(
         "\"build\": \"{}\"",
         if native { "native" } else { "portable" }
@@ -787,7 +789,7 @@ fn rates(t: &crate::Table) -> anyhow::Result<BTreeMap<(String, String), BTreeMap
 }
 
 fn plots(ctx: &Ctx) -> anyhow::Result<()> {
-    let Some(t) = ctx.read_csv("accel.csv", HEADER)? else {
+    let Some(t) = read_either(ctx, "accel.csv", HEADER)? else {
         return Ok(());
     };
     let rates = rates(&t)?;
@@ -841,7 +843,7 @@ fn plots(ctx: &Ctx) -> anyhow::Result<()> {
 }
 
 fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
-    let Some(t) = ctx.read_csv("accel.csv", HEADER)? else {
+    let Some(t) = read_either(ctx, "accel.csv", HEADER)? else {
         return Ok(None);
     };
     let mut md = String::new();
@@ -952,7 +954,7 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
             &rows,
         ));
     }
-    if let Some(tr) = ctx.read_csv("accel_traversal.csv", TRAVERSAL_HEADER)? {
+    if let Some(tr) = read_either(ctx, "accel_traversal.csv", TRAVERSAL_HEADER)? {
         md.push_str(
             "\nTraversal per ray (first-hit queries, any-hit for shadow rays; packet counts \
              divided by the rays in them): the BSP's inner nodes, leaves, triangle tests, active \
@@ -969,7 +971,7 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
 type Rows = BTreeMap<(String, String, String, usize), (f64, f64, f64)>;
 
 fn read_rows(ctx: &Ctx) -> anyhow::Result<Option<(Rows, Vec<String>)>> {
-    let Some(t) = ctx.read_csv("accel.csv", HEADER)? else {
+    let Some(t) = read_either(ctx, "accel.csv", HEADER)? else {
         return Ok(None);
     };
     let mut rows = Rows::new();
@@ -1211,7 +1213,7 @@ fn embree_facts(ctx: &Ctx) -> String {
 /// The portable build beside the native one (`native/accel.csv`, written by
 /// `scripts/reproduce.sh --native`), Mrays/s per scene, accelerator, ray kind and width.
 fn native_report(ctx: &Ctx, rows: &Rows) -> anyhow::Result<Option<String>> {
-    let Some(t) = ctx.read_csv("native/accel.csv", HEADER)? else {
+    let Some(t) = read_either(ctx, "native/accel.csv", HEADER)? else {
         return Ok(None);
     };
     let mut table = Vec::new();
@@ -1251,4 +1253,21 @@ fn native_report(ctx: &Ctx, rows: &Rows) -> anyhow::Result<Option<String>> {
         &table,
     ));
     Ok(Some(md))
+}
+
+/// Reads `file` with `header`, or, for results written before the last column was added
+/// (`hits,t_sum` in `accel.csv`, `obvhs_tests_per_ray` in `accel_traversal.csv`), with the
+/// header they had; the report then shows what those files hold.
+fn read_either(ctx: &Ctx, file: &str, header: &[&str]) -> anyhow::Result<Option<crate::Table>> {
+    match ctx.read_csv(file, header) {
+        Ok(t) => Ok(t),
+        Err(e) => {
+            let old = if file.ends_with("traversal.csv") {
+                &header[..header.len() - 1]
+            } else {
+                &header[..header.len() - 2]
+            };
+            ctx.read_csv(file, old).map_err(|_| e)
+        }
+    }
 }
