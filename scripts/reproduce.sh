@@ -2,9 +2,31 @@
 # Regenerates results/ (or --out DIR): fetches the pinned native pieces (Embree, meshes),
 # then runs `reproduce` in release mode with the arguments given, e.g.
 #   scripts/reproduce.sh --quick --only accel --out /tmp/results
+#
+# --native: first runs the same experiments from a build for this CPU (`-C target-cpu=native`,
+# in its own target folder target/native, so the portable build is untouched) into DIR/native,
+# then the portable build into DIR; reports show the two builds side by side where they have
+# both, and each folder's machine.json says which build it is (`build`: native / portable,
+# with its `rustflags` and `target_features`).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # A failed Embree set-up is not fatal here: the accel experiment then says so and measures
 # the other structures.
 python3 scripts/native.py || echo "reproduce.sh: going on without Embree (see the error above)" >&2
-exec cargo run --release -p coherent-experiments --bin reproduce -- "$@"
+native=0
+out=results
+args=()  # everything but --out
+while (($#)); do
+    case "$1" in
+        --native) native=1 ;;
+        --out) out="$2"; shift ;;
+        --out=*) out="${1#--out=}" ;;
+        *) args+=("$1") ;;
+    esac
+    shift
+done
+if ((native)); then
+    RUSTFLAGS="${RUSTFLAGS:-} -C target-cpu=native" CARGO_TARGET_DIR=target/native \
+        cargo run --release -p coherent-experiments --bin reproduce -- "${args[@]}" --out "$out/native"
+fi
+exec cargo run --release -p coherent-experiments --bin reproduce -- "${args[@]}" --out "$out"

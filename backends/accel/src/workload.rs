@@ -109,18 +109,31 @@ pub fn shadow_rays<A: Accel>(accel: &A, scene: &Scene, primary: &[Ray1], light: 
 
 /// Diffuse rays from the primary hits (in order; misses give none), cosine-distributed over
 /// the hemisphere of the geometric normal.
+///
+/// Each ray's random numbers are seeded by its primary ray (its direction's bits, one per
+/// pixel) and `seed`, not drawn from one stream in list order: the same pixel gets the same
+/// diffuse ray whatever order the primary rays come in, so workloads ordered for different
+/// packet widths hold the same rays.
 pub fn diffuse_rays<A: Accel>(accel: &A, scene: &Scene, primary: &[Ray1], seed: u64) -> Vec<Ray1> {
-    let mut rng = Rng::new(seed);
     primary
         .iter()
         .filter_map(|r| {
             let h = accel.intersect1(r)?;
             let (p, n) = hit_frame(scene, r, &h);
+            let mut rng = Rng::new(pixel_seed(seed, r));
             // Cosine-weighted: a point on the unit sphere around the normal's tip.
             let d = (n + rng.unit_vector()).normalize_or(n);
             Some(Ray1::infinite(offset(p, n), d))
         })
         .collect()
+}
+
+/// A seed from `seed` and the bits of a primary ray's direction (distinct per pixel).
+fn pixel_seed(seed: u64, r: &Ray1) -> u64 {
+    let mut k = Rng::new(seed ^ u64::from(r.dir.x.to_bits()));
+    let mut k = Rng::new(k.next_u64() ^ u64::from(r.dir.y.to_bits()));
+    let mut k = Rng::new(k.next_u64() ^ u64::from(r.dir.z.to_bits()));
+    k.next_u64()
 }
 
 /// What the timers measure.
@@ -129,8 +142,10 @@ pub enum Clock {
     /// Wall-clock time.
     #[default]
     Wall,
-    /// CPU time of the calling thread (Linux: `/proc/thread-self/schedstat`; elsewhere wall
-    /// time): time-slicing by other processes on a shared machine does not count.
+    /// CPU time of the calling thread (`clock_gettime(CLOCK_THREAD_CPUTIME_ID)`, nanosecond
+    /// resolution; elsewhere wall time): time-slicing by other processes on a shared machine
+    /// does not count. (`/proc/thread-self/schedstat`, used before, advanced in scheduler
+    /// ticks on the dev machine: passes of a few ms read as 0 or one tick.)
     ThreadCpu,
 }
 
@@ -141,12 +156,26 @@ impl Clock {
         let wall = || ORIGIN.get_or_init(Instant::now).elapsed().as_secs_f64();
         match self {
             Clock::Wall => wall(),
-            Clock::ThreadCpu => std::fs::read_to_string("/proc/thread-self/schedstat")
-                .ok()
-                .and_then(|s| s.split_whitespace().next()?.parse::<u64>().ok())
-                .map_or_else(wall, |ns| ns as f64 * 1e-9),
+            Clock::ThreadCpu => thread_cpu_seconds().unwrap_or_else(wall),
         }
     }
+}
+
+/// The calling thread's CPU time, in seconds.
+#[cfg(unix)]
+fn thread_cpu_seconds() -> Option<f64> {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: a valid clock id and a pointer to a timespec we own.
+    let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    (rc == 0).then_some(ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9)
+}
+
+#[cfg(not(unix))]
+fn thread_cpu_seconds() -> Option<f64> {
+    None
 }
 
 /// What a timed pass found: rays that hit (or were occluded), and the sum of their `t`
@@ -247,5 +276,38 @@ impl<A: Accel> Kernel for TimePackets<'_, A> {
             }
         }
         best
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::BruteForce;
+    use crate::scenes::{SceneSize, room};
+
+    /// Every packet width's workload holds the same rays, in its own tile order.
+    #[test]
+    fn every_tile_order_gives_the_same_diffuse_rays() {
+        let s = room(SceneSize::Quick);
+        let accel = BruteForce::build(&s.scene, &()).unwrap();
+        let key = |r: &Ray1| {
+            [r.origin, r.dir]
+                .map(|v| v.to_array().map(f32::to_bits))
+                .concat()
+        };
+        let sorted = |lanes: usize| {
+            let primary = primary_rays(&s.view, 16, 8, tile_shape(lanes));
+            let mut v: Vec<_> = diffuse_rays(&accel, &s.scene, &primary, 7)
+                .iter()
+                .map(key)
+                .collect();
+            v.sort_unstable();
+            v
+        };
+        let one = sorted(1);
+        assert!(!one.is_empty());
+        for lanes in [4, 8, 16] {
+            assert_eq!(sorted(lanes), one, "width {lanes}");
+        }
     }
 }

@@ -112,6 +112,53 @@ impl Bsp {
         self.first(l, rays, active, c)
     }
 
+    /// [`Accel::occluded1`], counting what the traversal did into `c`.
+    pub fn occluded1_counted(&self, ray: &Ray1, c: &mut TraversalStats) -> bool {
+        self.any1(ray, c)
+    }
+
+    /// [`Accel::occluded`], counting what the traversal did into `c`.
+    pub fn occluded_counted<L: Lanes>(
+        &self,
+        l: L,
+        rays: &Rays<L>,
+        active: L::Mask,
+        c: &mut TraversalStats,
+    ) -> L::Mask {
+        self.any(l, rays, active, c)
+    }
+
+    #[inline(always)]
+    fn any1<C: Counters>(&self, ray: &Ray1, c: &mut C) -> bool {
+        if !ray.is_valid() {
+            return false;
+        }
+        let mut q = Any1 {
+            tmax: ray.tmax,
+            occluded: false,
+        };
+        crate::walk1::scene1(self, ray.origin, ray.dir, ray.tmin, &mut q, c);
+        q.occluded
+    }
+
+    #[inline(always)]
+    fn any<L: Lanes, C: Counters>(
+        &self,
+        l: L,
+        rays: &Rays<L>,
+        active: L::Mask,
+        c: &mut C,
+    ) -> L::Mask {
+        let mut q = AnyP {
+            tmax: rays.tmax,
+            occluded: l.splat_mask(false),
+            active: active & rays.valid(l),
+            neg_inf: l.splat(f32::NEG_INFINITY),
+        };
+        crate::walk::scene_packet(l, self, rays, active, &mut q, c);
+        q.occluded & active
+    }
+
     #[inline(always)]
     fn first1<C: Counters>(&self, ray: &Ray1, c: &mut C) -> Option<Hit1> {
         if !ray.is_valid() {
@@ -251,15 +298,7 @@ impl Accel for Bsp {
     }
 
     fn occluded1(&self, ray: &Ray1) -> bool {
-        if !ray.is_valid() {
-            return false;
-        }
-        let mut q = Any1 {
-            tmax: ray.tmax,
-            occluded: false,
-        };
-        crate::walk1::scene1(self, ray.origin, ray.dir, ray.tmin, &mut q, &mut ());
-        q.occluded
+        self.any1(ray, &mut ())
     }
 
     fn intersect_all1(&self, ray: &Ray1, f: &mut impl FnMut(Hit1)) {
@@ -281,13 +320,7 @@ impl Accel for Bsp {
 
     #[inline(always)]
     fn occluded<L: Lanes>(&self, l: L, rays: &Rays<L>, active: L::Mask) -> L::Mask {
-        let mut q = AnyP {
-            tmax: rays.tmax,
-            occluded: l.splat_mask(false),
-            neg_inf: l.splat(f32::NEG_INFINITY),
-        };
-        crate::walk::scene_packet(l, self, rays, active, &mut q, &mut ());
-        q.occluded & active
+        self.any(l, rays, active, &mut ())
     }
 
     #[inline(always)]

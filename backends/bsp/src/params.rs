@@ -166,15 +166,18 @@ impl BspParams {
 }
 
 /// The measured best active-lane count at or below which a packet's subtree is traversed ray
-/// by ray, per packet width: 0 (never) at every width.
+/// by ray, per packet width: 0 (never) at every width and for every kind of ray.
 ///
 /// Measured by the `accel` experiment's sweep (`accel_threshold.csv`, thresholds 0 to
-/// width / 2, primary and diffuse rays, `room` and `blob`): 0 was best or within noise of the
-/// best everywhere, e.g. room primary at 256x192 (quick): width 4 (sse) 15.5 / 14.6 / 13.0
-/// Mrays/s for thresholds 0 / 1 / 2, width 16 (pulp16) 34.4 / 33.1 / 30.4 / 28.0 / 25.8 for
-/// 0 to 4. A kd-tree packet step with one active lane costs about what a single-ray step
-/// costs (a split test and a branch), while each switch pays for unpacking the lane, three
-/// divisions and a fresh mailbox, and switched subtrees are mostly small.
+/// width / 2, primary, shadow and diffuse rays, `room` and `blob`, thread CPU time): 0 was
+/// the best or within noise of it for every kind, so one default serves all kinds. E.g. quick
+/// run on the dev machine (AVX-512): room shadow at width 16 (pulp16) 41.8 / 41.4 / 33.4 /
+/// 35.4 / 29.9 Mrays/s for thresholds 0 to 4; room diffuse at width 16 7.03 / 6.46 / 6.25 /
+/// 5.83 / 5.51; blob primary at width 16 18.5 / 17.2 / 14.6 / 12.6 / 10.7. Embree's hybrid
+/// switches below about 3/5/14 active lanes of 4/8/16, but a kd-tree packet step with one
+/// active lane costs about what a single-ray step costs (a split test and a branch), while
+/// each switch pays for unpacking the lane, three divisions and a fresh mailbox, and switched
+/// subtrees are mostly small.
 pub fn default_single_ray_threshold(_lanes: usize) -> u32 {
     0
 }

@@ -27,6 +27,11 @@ pub(crate) trait QueryP<L: Lanes> {
     fn hits(&mut self, l: L, m: L::Mask, t: L::F32s, u: L::F32s, v: L::F32s, prim: u32, inst: u32);
     /// True when every lane of `m` is finished.
     fn finished(&self, m: L::Mask) -> bool;
+    /// True when every lane of the query is finished (nothing more to find anywhere).
+    #[inline(always)]
+    fn done(&self) -> bool {
+        false
+    }
     /// Runs `task` with lane `i`'s single-ray query and takes back its result.
     fn with_lane(&mut self, l: L, i: usize, task: &mut impl LaneTask);
 }
@@ -148,6 +153,8 @@ impl<L: Lanes> QueryP<L> for FirstP<L> {
 pub(crate) struct AnyP<L: Lanes> {
     pub tmax: L::F32s,
     pub occluded: L::Mask,
+    /// The lanes asked about.
+    pub active: L::Mask,
     /// `-inf` in every lane.
     pub neg_inf: L::F32s,
 }
@@ -165,6 +172,10 @@ impl<L: Lanes> QueryP<L> for AnyP<L> {
     #[inline(always)]
     fn finished(&self, m: L::Mask) -> bool {
         m.and_not(self.occluded).none()
+    }
+    #[inline(always)]
+    fn done(&self) -> bool {
+        self.active.and_not(self.occluded).none()
     }
     #[inline(always)]
     fn with_lane(&mut self, l: L, i: usize, task: &mut impl LaneTask) {

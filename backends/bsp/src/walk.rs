@@ -136,7 +136,8 @@ pub(crate) fn sign_groups<L: Lanes>(
 
 /// Walks `tree` from `start` with lanes `m` over per-lane segments `[tn, tf]`, front to
 /// back, calling `leaf(s, c, items, lanes)` at each leaf. Entries are skipped for lanes whose
-/// `limit(s)` is before them. A subtree whose active lanes are at most `thr` goes to
+/// `limit(s)` is before them; the walk ends as soon as `done(s)` (every lane of the query
+/// finished: occlusion found for all). A subtree whose active lanes are at most `thr` goes to
 /// `single(s, c, node, lanes, tn, tf)` instead (`thr = 0` never switches).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
@@ -152,6 +153,7 @@ pub(crate) fn walk<L: Lanes, S, C: Counters>(
     s: &mut S,
     c: &mut C,
     limit: impl Fn(&S) -> L::F32s,
+    done: impl Fn(&S) -> bool,
     mut leaf: impl FnMut(&mut S, &mut C, &[u32], L::Mask),
     mut single: impl FnMut(&mut S, &mut C, usize, L::Mask, L::F32s, L::F32s),
 ) {
@@ -162,12 +164,18 @@ pub(crate) fn walk<L: Lanes, S, C: Counters>(
         if m.count() <= thr {
             c.handoff(m.count());
             single(s, c, node, m, tn, tf);
+            if done(s) {
+                return;
+            }
         } else {
             loop {
                 let n = nodes[node];
                 if n.is_leaf() {
                     c.leaf();
                     leaf(s, c, &tree.items[n.items()], m);
+                    if done(s) {
+                        return;
+                    }
                     break;
                 }
                 c.inner();
@@ -197,6 +205,9 @@ pub(crate) fn walk<L: Lanes, S, C: Counters>(
                     if m.count() <= thr {
                         c.handoff(m.count());
                         single(s, c, node, m, tn, tf);
+                        if done(s) {
+                            return;
+                        }
                         break;
                     }
                 }
@@ -247,6 +258,8 @@ pub(crate) fn mesh_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
         c,
         #[inline(always)]
         |q| q.limit(),
+        #[inline(always)]
+        |q| q.done(),
         #[inline(always)]
         |q, c, items, m| {
             let bits = m.bitmask();
@@ -371,6 +384,9 @@ pub(crate) fn scene_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
                 wr.signs = signs;
                 for &i in &bsp.top.items[root.items()] {
                     enter_instance(l, bsp, i, rays, &wr, g, thr, q, c);
+                    if q.done() {
+                        return;
+                    }
                 }
             },
         );
@@ -403,9 +419,14 @@ pub(crate) fn scene_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
                 #[inline(always)]
                 |q| q.limit(),
                 #[inline(always)]
+                |q| q.done(),
+                #[inline(always)]
                 |q, c, items, m| {
                     let bits = m.bitmask();
                     for &i in items {
+                        if q.done() {
+                            return;
+                        }
                         let new = seen.untested(i, bits);
                         if new == 0 {
                             continue;

@@ -123,7 +123,8 @@ fn guarded_packet<const K: usize>() {
     for i in 0..K {
         set_lane(&mut g.packet, i, &ray(i));
     }
-    scene.intersect_k(&mut g.packet, &valid_lanes::<K>(K));
+    // SAFETY: every lane holds a valid ray with tnear = 0 <= tfar and an empty hit.
+    unsafe { scene.intersect_k_raw(&mut g.packet, &valid_lanes::<K>(K)) };
     assert!(
         g.guard.iter().all(|&w| w == SENTINEL),
         "{K}-wide: the library wrote past the hit"
@@ -221,18 +222,19 @@ fn first_hit_all_hits_and_occlusion() {
 #[test]
 fn all_hits_of_a_packet_go_to_their_lanes() {
     let scene = two_squares();
-    let mut p = RTCRayHitK::<8>::default();
     // Even lanes inside both squares, odd lanes inside the second only; lane 7 off.
-    for i in 0..8 {
-        let r = if i % 2 == 0 {
-            up(0.75, 0.1 * i as f32 + 0.05)
-        } else {
-            up(1.5, 1.2)
-        };
-        set_lane(&mut p, i, &r);
-    }
+    let rays: Vec<Ray1> = (0..7)
+        .map(|i| {
+            if i % 2 == 0 {
+                up(0.75, 0.1 * i as f32 + 0.05)
+            } else {
+                up(1.5, 1.2)
+            }
+        })
+        .collect();
+    let mut p = PacketK::<8>::new(&scene, &rays);
     let mut hits = Vec::new();
-    scene.all_hits_k(&mut p, &valid_lanes::<8>(7), &mut hits);
+    scene.all_hits_k(&mut p, &mut hits);
     for lane in 0..8u32 {
         let mut insts: Vec<u32> = hits
             .iter()
@@ -403,4 +405,91 @@ fn device_reports_what_the_comparison_relies_on() {
         d.native_packets(8),
         d.native_packets(16)
     );
+}
+
+#[test]
+fn only_the_4_4_abi_is_accepted() {
+    assert!(crate::device::check_abi(40400).is_ok());
+    assert!(crate::device::check_abi(40401).is_ok());
+    for v in [40300, 40500, 30000, 50000] {
+        let e = crate::device::check_abi(v).unwrap_err().to_string();
+        let found = crate::version_string(v);
+        assert!(e.contains(&found) && e.contains("4.4"), "{e}");
+    }
+}
+
+#[test]
+fn packed_packets_switch_off_rays_outside_the_contract() {
+    let scene = two_squares();
+    let nan = Vec3::new(f32::NAN, 0.0, 0.0);
+    let rays = [
+        up(0.75, 0.25),                                            // hits instance 0 at t = 2
+        Ray1::new(nan, Vec3::Z, 0.0, f32::INFINITY),               // NaN origin
+        Ray1::new(Vec3::ZERO, Vec3::ZERO, 0.0, f32::INFINITY),     // zero direction
+        Ray1::new(Vec3::new(0.75, 0.25, -2.0), Vec3::Z, 5.0, 1.0), // tmin > tmax
+        Ray1::new(Vec3::new(0.75, 0.25, 2.0), Vec3::Z, -9.0, f32::INFINITY), // behind: t = -1
+    ];
+    let mut p = PacketK::<8>::new(&scene, &rays);
+    assert_eq!(p.lanes(), 0b10001);
+    for round in 0..2 {
+        p.reset();
+        scene.intersect_k(&mut p);
+        let h = p.hit(0).unwrap();
+        assert!((h.t - 2.0).abs() < 1e-6, "round {round}: {h:?}");
+        for i in 1..4 {
+            assert_eq!(p.hit(i), None, "lane {i}");
+        }
+        let behind = p.hit(4).unwrap();
+        assert!((behind.t + 1.0).abs() < 1e-5, "{behind:?}");
+        p.reset();
+        scene.occluded_k(&mut p);
+        assert_eq!(p.occluded_bits(), 0b10001);
+    }
+}
+
+#[test]
+fn one_untransformed_instance_has_no_instance_level_and_same_answers() {
+    let mut scene = Scene::default();
+    let m = scene.add_mesh(square());
+    scene.add_instance(m, Affine3A::IDENTITY);
+    for all_hits in [true, false] {
+        let p = EmbreeParams {
+            all_hits,
+            ..EmbreeParams::default()
+        };
+        let e = Embree::build(&scene, &p).unwrap();
+        assert!(e.direct);
+        let r = Ray1::infinite(Vec3::new(0.75, 0.25, -2.0), Vec3::Z);
+        let h = e.intersect1(&r).unwrap();
+        assert_eq!((h.inst, h.prim), (0, 0));
+        let mut all = Vec::new();
+        e.intersect_all1(&r, &mut |h| all.push(h));
+        assert_eq!(all.len(), 1);
+        assert_eq!(all[0].inst, 0);
+        let mut pk = PacketK::<4>::new(&e, &[r]);
+        e.intersect_k(&mut pk);
+        assert_eq!(pk.hit(0).map(|h| h.inst), Some(0));
+    }
+    // Moved: an instance level again.
+    let mut e = Embree::build(&scene, &EmbreeParams::default()).unwrap();
+    let moved = Instance::new(m, Affine3A::from_translation(Vec3::Z));
+    e.set_instances(&[moved]).unwrap();
+    assert!(!e.direct);
+    let r = Ray1::infinite(Vec3::new(0.75, 0.25, -2.0), Vec3::Z);
+    assert!((e.intersect1(&r).unwrap().t - 3.0).abs() < 1e-6);
+}
+
+#[test]
+fn all_hits_without_the_filter_flag_use_a_copy_with_it() {
+    let scene = two_squares_scene();
+    let p = EmbreeParams {
+        all_hits: false,
+        ..EmbreeParams::default()
+    };
+    let e = Embree::build(&scene, &p).unwrap();
+    let mut insts = Vec::new();
+    e.intersect_all1(&up(0.75, 0.25), &mut |h| insts.push(h.inst));
+    insts.sort();
+    assert_eq!(insts, [0, 1]);
+    assert_eq!(e.intersect1(&up(0.75, 0.25)).map(|h| h.inst), Some(0));
 }

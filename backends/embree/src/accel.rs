@@ -78,16 +78,16 @@ impl Accel for Embree {
     #[inline(always)]
     fn intersect_all<L: Lanes>(
         &self,
-        l: L,
+        _l: L,
         rays: &Rays<L>,
         active: L::Mask,
         f: &mut impl FnMut(usize, Hit1),
     ) {
         use coherent_simd::SimdMask;
         match L::N {
-            4 => self.intersect_all_packet::<L, 4>(l, rays, active, f),
-            8 => self.intersect_all_packet::<L, 8>(l, rays, active, f),
-            16 => self.intersect_all_packet::<L, 16>(l, rays, active, f),
+            4 => self.intersect_all_packet::<L, 4>(rays, active, f),
+            8 => self.intersect_all_packet::<L, 8>(rays, active, f),
+            16 => self.intersect_all_packet::<L, 16>(rays, active, f),
             _ => {
                 for i in 0..L::N {
                     if active.lane(i) {

@@ -60,13 +60,7 @@ impl Device {
                 &*device.memory as *const AtomicIsize as *mut c_void,
             )
         };
-        let major = device.property(ffi::DEVICE_PROPERTY_VERSION_MAJOR);
-        if major != 4 {
-            return Err(EmbreeError::Unusable {
-                path: "(loaded library)".into(),
-                why: format!("version {} is not Embree 4", device.version()),
-            });
-        }
+        check_abi(device.version())?;
         device.check("set up the device")?;
         Ok(device)
     }
@@ -74,6 +68,38 @@ impl Device {
     /// `rtcGetDeviceProperty(VERSION)`, e.g. 40400 for 4.4.0.
     pub fn version(&self) -> u32 {
         self.property(ffi::DEVICE_PROPERTY_VERSION) as u32
+    }
+
+    /// The instruction set Embree's kernels use here. Embree has no property for it; it
+    /// dispatches to its widest kernels this CPU runs, and native 16-wide packets exist only
+    /// in its AVX-512 kernels, native 8-wide in its AVX/AVX2 ones: so `avx512` with native
+    /// 16-wide packets, else `avx2` (8-wide and the CPU has AVX2), `avx` (8-wide), else
+    /// `sse4.2` or `sse2` by the CPU.
+    pub fn isa(&self) -> &'static str {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if self.native_packets(16) {
+                "avx512"
+            } else if self.native_packets(8) {
+                if std::arch::is_x86_feature_detected!("avx2") {
+                    "avx2"
+                } else {
+                    "avx"
+                }
+            } else if std::arch::is_x86_feature_detected!("sse4.2") {
+                "sse4.2"
+            } else {
+                "sse2"
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            if self.native_packets(8) {
+                "neon2x"
+            } else {
+                "neon"
+            }
+        }
     }
 
     /// Whether the library has native (not emulated) packets of `width` rays on this CPU.
@@ -119,6 +145,24 @@ impl Device {
                 code: error_name(self.api, code),
             })
         }
+    }
+}
+
+/// The ABI this backend declares (`ffi.rs`: the 4.4 hit structs with `instPrimID`, one
+/// instance level). Another version's structs may differ in size, and the library would
+/// write past ours: refused, naming the version found.
+pub(crate) fn check_abi(version: u32) -> Result<(), EmbreeError> {
+    if version / 100 == 404 {
+        Ok(())
+    } else {
+        Err(EmbreeError::Unusable {
+            path: "(loaded library)".into(),
+            why: format!(
+                "it is Embree {}, and this backend is written for the Embree 4.4 ABI \
+                 (its hit structs differ in other versions)",
+                crate::version_string(version)
+            ),
+        })
     }
 }
 

@@ -11,6 +11,7 @@ mod device;
 mod error;
 pub mod ffi;
 pub mod library;
+mod packet;
 mod query;
 mod scene;
 
@@ -19,6 +20,7 @@ mod abi;
 
 pub use device::Device;
 pub use error::EmbreeError;
+pub use packet::PacketK;
 pub use query::valid_lanes;
 pub use scene::{BuildQuality, Embree, EmbreeParams};
 
@@ -30,4 +32,33 @@ pub fn unavailable_reason() -> Option<String> {
 /// `rtcGetDeviceProperty(VERSION)` of the loaded library, e.g. 40400 for 4.4.0.
 pub fn version() -> Result<u32, EmbreeError> {
     Device::new(Some(1)).map(|d| d.version())
+}
+
+/// What the loaded Embree runs on this machine (for `machine.json` and reports).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct EmbreeInfo {
+    /// `major.minor.patch`, e.g. `4.4.0`.
+    pub version: String,
+    /// The instruction set its kernels use here (see [`Device::isa`]).
+    pub isa: &'static str,
+    /// The packet widths (of 4, 8, 16) it runs natively rather than emulated.
+    pub native_packets: Vec<usize>,
+}
+
+/// [`EmbreeInfo`] of the loaded library, or why there is none.
+pub fn info() -> Result<EmbreeInfo, EmbreeError> {
+    let d = Device::new(Some(1))?;
+    Ok(EmbreeInfo {
+        version: version_string(d.version()),
+        isa: d.isa(),
+        native_packets: [4, 8, 16]
+            .into_iter()
+            .filter(|&w| d.native_packets(w))
+            .collect(),
+    })
+}
+
+/// 40400 -> `4.4.0`.
+pub fn version_string(v: u32) -> String {
+    format!("{}.{}.{}", v / 10000, v / 100 % 100, v % 100)
 }

@@ -9,9 +9,10 @@
 use core::ffi::c_int;
 
 use coherent_accel::{Hit1, Hits, Ray1, Rays};
-use coherent_simd::{Lanes, SimdF32, SimdMask};
+use coherent_simd::{Lanes, SimdMask};
 
 use crate::ffi::{self, RTCRayHitK, RTCRayQueryContext, ValidK};
+use crate::packet::PacketK;
 use crate::scene::Embree;
 
 /// The context of an all-hits query: Embree's context first (the library sees only that),
@@ -122,55 +123,29 @@ fn ray_hit1(r: &Ray1, s: &Segment) -> ffi::RTCRayHit {
     }
 }
 
-/// A K-wide packet of `rays` (lane ids for the filter callback), the valid mask of the
-/// lanes on in `active` that hold valid rays (Embree's answer on invalid rays is undefined)
-/// and meet the scene's box if `tmin < 0`, the lanes' bits, and each lane's `t` shift.
-#[inline(always)]
-fn packet<L: Lanes, const K: usize>(
-    e: &Embree,
-    l: L,
-    rays: &Rays<L>,
-    active: L::Mask,
-) -> (RTCRayHitK<K>, ValidK<K>, u32, Option<[f32; K]>) {
-    debug_assert_eq!(L::N, K);
-    let mut bits = (active & rays.valid(l)).bitmask();
-    let mut p = RTCRayHitK::<K>::default();
-    rays.origin.x.store(&mut p.org_x);
-    rays.origin.y.store(&mut p.org_y);
-    rays.origin.z.store(&mut p.org_z);
-    rays.dir.x.store(&mut p.dir_x);
-    rays.dir.y.store(&mut p.dir_y);
-    rays.dir.z.store(&mut p.dir_z);
-    rays.tmin.store(&mut p.tnear);
-    rays.tmax.store(&mut p.tfar);
-    p.id = core::array::from_fn(|i| i as u32);
-    let mut shift = None;
-    if bits != 0 && rays.tmin.reduce_min() < 0.0 {
-        // Rare: lanes searching behind their origin, one at a time.
-        let mut s = [0.0f32; K];
-        for (i, si) in s.iter_mut().enumerate() {
-            if bits >> i & 1 == 0 || p.tnear[i] >= 0.0 {
-                continue;
-            }
-            match e.segment(&rays.lane(i)) {
-                Some(seg) => {
-                    [p.org_x[i], p.org_y[i], p.org_z[i]] = seg.origin.to_array();
-                    (p.tnear[i], p.tfar[i], *si) = (seg.tnear, seg.tfar, seg.shift);
-                }
-                None => bits &= !(1 << i),
-            }
-        }
-        shift = Some(s);
-    }
-    let valid = ValidK(core::array::from_fn(|i| {
-        if bits >> i & 1 == 1 { -1 } else { 0 }
-    }));
-    (p, valid, bits, shift)
-}
-
 /// A valid mask with the first `n` lanes on.
 pub fn valid_lanes<const K: usize>(n: usize) -> ValidK<K> {
-    ValidK(core::array::from_fn(|i| if i < n { -1 } else { 0 }))
+    let mut v = ValidK([0; K]);
+    for (i, w) in v.0.iter_mut().enumerate() {
+        *w = if i < n { -1 } else { 0 };
+    }
+    v
+}
+
+/// Lanes `active` of `rays` as a packed K-wide packet.
+#[inline(always)]
+fn packet<L: Lanes, const K: usize>(e: &Embree, rays: &Rays<L>, active: L::Mask) -> PacketK<K> {
+    debug_assert_eq!(L::N, K);
+    let bits = active.bitmask();
+    let mut buf = [Ray1::infinite(glam::Vec3::ZERO, glam::Vec3::X); K];
+    for (i, r) in buf.iter_mut().enumerate() {
+        if bits >> i & 1 == 1 {
+            *r = rays.lane(i);
+        } else {
+            r.tmin = f32::NAN; // invalid: off
+        }
+    }
+    PacketK::new(e, &buf)
 }
 
 impl Embree {
@@ -190,7 +165,12 @@ impl Embree {
             u: rh.hit.u,
             v: rh.hit.v,
             prim: rh.hit.primID,
-            inst: rh.hit.instID[0],
+            // One untransformed instance is the mesh itself: no instance id is written.
+            inst: if rh.hit.instID[0] == ffi::INVALID_ID {
+                0
+            } else {
+                rh.hit.instID[0]
+            },
         })
     }
 
@@ -218,6 +198,9 @@ impl Embree {
         let Some(seg) = self.segment(r) else {
             return;
         };
+        let Some(scene) = self.all_hits_scene() else {
+            return;
+        };
         let mut hits = Vec::new();
         let mut ctx = AllHitsContext {
             base: RTCRayQueryContext::default(),
@@ -229,51 +212,68 @@ impl Embree {
         args.context = (&mut ctx as *mut AllHitsContext).cast();
         args.filter = Some(record_and_reject);
         let mut rh = ray_hit1(r, &seg);
-        // SAFETY: as in `first_hit1`; the context outlives the call.
-        unsafe { (self.device.api.intersect1)(self.top, &mut rh, &mut args) };
+        // SAFETY: as in `first_hit1`, on a scene with filter functions in arguments; the
+        // context outlives the call.
+        unsafe { (scene.device.api.intersect1)(scene.top, &mut rh, &mut args) };
         hits.into_iter().for_each(|(_, h)| {
             f(Hit1 {
                 t: h.t + seg.shift,
+                inst: if scene.direct { 0 } else { h.inst },
                 ..h
             })
         });
     }
 
-    /// First hits of a K-wide packet (K = 4, 8, 16) for the lanes on in `valid`; results
-    /// are read back from the packet (`geomID` != invalid: `tfar`, `u`, `v`, `primID`,
-    /// `instID`).
-    pub fn intersect_k<const K: usize>(&self, p: &mut RTCRayHitK<K>, valid: &ValidK<K>) {
+    /// First hits of a packed K-wide packet (K = 4, 8, 16); read them back with
+    /// [`PacketK::hit`]. Safe: a [`PacketK`] holds only rays Embree's contract accepts.
+    #[inline]
+    pub fn intersect_k<const K: usize>(&self, p: &mut PacketK<K>) {
         let mut args = ffi::RTCIntersectArguments::new(flags(self.params.coherent));
-        self.call_intersect(p, valid, &mut args);
+        // SAFETY: `PacketK::new` switched on only lanes with valid rays and `tnear >= 0`.
+        unsafe { self.call_intersect(&mut p.rh, &p.valid, &mut args) };
     }
 
-    /// Occlusion of a K-wide packet (occluded lanes get `tfar = -inf`).
-    pub fn occluded_k<const K: usize>(&self, p: &mut RTCRayHitK<K>, valid: &ValidK<K>) {
-        const {
-            assert!(
-                K == 4 || K == 8 || K == 16,
-                "Embree has 4, 8 and 16-wide packets"
-            )
-        };
+    /// Occlusion of a packed K-wide packet; read it back with [`PacketK::occluded`].
+    #[inline]
+    pub fn occluded_k<const K: usize>(&self, p: &mut PacketK<K>) {
         let mut args = ffi::RTCOccludedArguments::new(flags(self.params.coherent));
-        let api = self.device.api;
-        let v = valid.0.as_ptr();
-        let p = (p as *mut RTCRayHitK<K>).cast();
-        // SAFETY: the K-wide call matching K; `p` (whose ray part is an RTCRayK) and `valid`
-        // have the library's layout and alignment for K; arguments set as
-        // `rtcInitOccludedArguments` does.
-        unsafe {
-            match K {
-                4 => (api.occluded4)(v, self.top, p, &mut args),
-                8 => (api.occluded8)(v, self.top, p.cast(), &mut args),
-                _ => (api.occluded16)(v, self.top, p.cast(), &mut args),
+        // SAFETY: as in `intersect_k`.
+        unsafe { self.call_occluded(&mut p.rh, &p.valid, &mut args) };
+    }
+
+    /// Every hit of every valid lane of a packed K-wide packet, as (lane, hit) pairs appended
+    /// to `hits`, each (lane, triangle, instance) once, `t` in the ray's own units.
+    pub fn all_hits_k<const K: usize>(&self, p: &mut PacketK<K>, hits: &mut Vec<(u32, Hit1)>) {
+        let from = hits.len();
+        let Some(scene) = self.all_hits_scene() else {
+            return;
+        };
+        // SAFETY: as in `intersect_k`.
+        unsafe { scene.all_hits_k_raw(&mut p.rh, &p.valid, hits) };
+        for (lane, h) in &mut hits[from..] {
+            h.t += p.shift[*lane as usize];
+            if scene.direct {
+                h.inst = 0;
             }
         }
     }
 
-    /// Every hit of every valid lane of a K-wide packet, as (lane, hit) pairs appended to
-    /// `hits`, each (lane, triangle, instance) once.
-    pub fn all_hits_k<const K: usize>(
+    /// `rtcIntersectK` on a raw packet (the layout tests use it with guard words).
+    ///
+    /// # Safety
+    /// Every lane on in `valid` must hold a valid ray ([`Ray1::is_valid`]) with
+    /// `0 <= tnear <= tfar`, and its hit's `geomID` must be [`ffi::INVALID_ID`]: Embree's
+    /// answer on other rays is undefined.
+    pub unsafe fn intersect_k_raw<const K: usize>(&self, p: &mut RTCRayHitK<K>, valid: &ValidK<K>) {
+        let mut args = ffi::RTCIntersectArguments::new(flags(self.params.coherent));
+        // SAFETY: the caller's contract.
+        unsafe { self.call_intersect(p, valid, &mut args) };
+    }
+
+    /// # Safety
+    /// As [`Self::intersect_k_raw`]; this scene must have been built with filter functions
+    /// in arguments (`EmbreeParams::all_hits`).
+    unsafe fn all_hits_k_raw<const K: usize>(
         &self,
         p: &mut RTCRayHitK<K>,
         valid: &ValidK<K>,
@@ -288,10 +288,44 @@ impl Embree {
         );
         args.context = (&mut ctx as *mut AllHitsContext).cast();
         args.filter = Some(record_and_reject);
-        self.call_intersect(p, valid, &mut args);
+        // SAFETY: the caller's contract; the context outlives the call.
+        unsafe { self.call_intersect(p, valid, &mut args) };
     }
 
-    fn call_intersect<const K: usize>(
+    /// # Safety
+    /// As [`Self::intersect_k_raw`].
+    #[inline(always)]
+    unsafe fn call_occluded<const K: usize>(
+        &self,
+        p: &mut RTCRayHitK<K>,
+        valid: &ValidK<K>,
+        args: &mut ffi::RTCOccludedArguments,
+    ) {
+        const {
+            assert!(
+                K == 4 || K == 8 || K == 16,
+                "Embree has 4, 8 and 16-wide packets"
+            )
+        };
+        let api = self.device.api;
+        let v = valid.0.as_ptr();
+        let p = (p as *mut RTCRayHitK<K>).cast();
+        // SAFETY: the K-wide call matching K; `p` (whose ray part is an RTCRayK) and `valid`
+        // have the library's layout and alignment for K; arguments set as
+        // `rtcInitOccludedArguments` does; rays as the caller promised.
+        unsafe {
+            match K {
+                4 => (api.occluded4)(v, self.top, p, args),
+                8 => (api.occluded8)(v, self.top, p.cast(), args),
+                _ => (api.occluded16)(v, self.top, p.cast(), args),
+            }
+        }
+    }
+
+    /// # Safety
+    /// As [`Self::intersect_k_raw`].
+    #[inline(always)]
+    unsafe fn call_intersect<const K: usize>(
         &self,
         p: &mut RTCRayHitK<K>,
         valid: &ValidK<K>,
@@ -306,7 +340,7 @@ impl Embree {
         let api = self.device.api;
         let v = valid.0.as_ptr();
         let p = (p as *mut RTCRayHitK<K>).cast();
-        // SAFETY: as in `occluded_k`.
+        // SAFETY: as in `call_occluded`.
         unsafe {
             match K {
                 4 => (api.intersect4)(v, self.top, p, args),
@@ -324,26 +358,12 @@ impl Embree {
         rays: &Rays<L>,
         active: L::Mask,
     ) -> Hits<L> {
-        let (mut p, valid, bits, shift) = packet::<L, K>(self, l, rays, active);
-        if bits == 0 {
+        let mut p = packet::<L, K>(self, rays, active);
+        if p.lanes() == 0 {
             return Hits::miss(l);
         }
-        self.intersect_k(&mut p, &valid);
-        if let Some(s) = shift {
-            p.tfar = core::array::from_fn(|i| p.tfar[i] + s[i]);
-        }
-        let hit: [bool; K] = core::array::from_fn(|i| p.geomID[i] != ffi::INVALID_ID);
-        let m = l.mask_from_fn(|i| hit[i]);
-        let miss = Hits::miss(l);
-        let id = |a: &[u32; K]| l.load_i32(&a.map(|x| x as i32));
-        let got = Hits {
-            t: l.load(&p.tfar),
-            u: l.load(&p.u),
-            v: l.load(&p.v),
-            prim: id(&p.primID),
-            inst: id(&p.instID[0]),
-        };
-        Hits::select(m, &got, &miss)
+        self.intersect_k(&mut p);
+        Hits::from_fn(l, |i| p.hit(i))
     }
 
     /// [`coherent_accel::Accel::occluded`] for `L::N == K`.
@@ -354,38 +374,53 @@ impl Embree {
         rays: &Rays<L>,
         active: L::Mask,
     ) -> L::Mask {
-        let (mut p, valid, bits, _) = packet::<L, K>(self, l, rays, active);
-        if bits == 0 {
+        let mut p = packet::<L, K>(self, rays, active);
+        if p.lanes() == 0 {
             return l.splat_mask(false);
         }
-        self.occluded_k(&mut p, &valid);
-        l.load(&p.tfar).eq(l.splat(f32::NEG_INFINITY)) & l.mask_from_bits(bits)
+        self.occluded_k(&mut p);
+        l.mask_from_bits(p.occluded_bits())
     }
 
     /// [`coherent_accel::Accel::intersect_all`] for `L::N == K`.
     #[inline(always)]
     pub(crate) fn intersect_all_packet<L: Lanes, const K: usize>(
         &self,
-        l: L,
         rays: &Rays<L>,
         active: L::Mask,
         f: &mut impl FnMut(usize, Hit1),
     ) {
-        let (mut p, valid, bits, shift) = packet::<L, K>(self, l, rays, active);
-        if bits == 0 {
+        let mut p = packet::<L, K>(self, rays, active);
+        if p.lanes() == 0 {
             return;
         }
         let mut hits = Vec::new();
-        self.all_hits_k(&mut p, &valid, &mut hits);
-        let s = shift.unwrap_or([0.0; K]);
-        hits.into_iter().for_each(|(lane, h)| {
-            f(
-                lane as usize,
-                Hit1 {
-                    t: h.t + s[lane as usize],
-                    ..h
-                },
-            )
-        });
+        self.all_hits_k(&mut p, &mut hits);
+        hits.into_iter().for_each(|(lane, h)| f(lane as usize, h));
+    }
+}
+
+impl Embree {
+    /// The plainest use of the C API, to measure what any wrapper costs: for each packed
+    /// packet, restore its far bounds and hit ids ([`PacketK::reset`]) and call
+    /// `rtcIntersectK` (or `rtcOccludedK` when `occlusion`), with the query arguments made
+    /// once. Nothing is read back.
+    pub fn trace_plain<const K: usize>(&self, packets: &mut [PacketK<K>], occlusion: bool) {
+        let fl = flags(self.params.coherent);
+        if occlusion {
+            let mut args = ffi::RTCOccludedArguments::new(fl);
+            for p in packets {
+                p.reset();
+                // SAFETY: a `PacketK` holds only rays inside Embree's contract.
+                unsafe { self.call_occluded(&mut p.rh, &p.valid, &mut args) };
+            }
+        } else {
+            let mut args = ffi::RTCIntersectArguments::new(fl);
+            for p in packets {
+                p.reset();
+                // SAFETY: as above.
+                unsafe { self.call_intersect(&mut p.rh, &p.valid, &mut args) };
+            }
+        }
     }
 }

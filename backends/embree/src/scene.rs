@@ -71,6 +71,11 @@ pub struct EmbreeParams {
     pub threads: Option<usize>,
     /// Packets carry Embree's COHERENT query flag (rays of a packet travel together).
     pub coherent: bool,
+    /// Build the scenes with `RTC_SCENE_FLAG_FILTER_FUNCTION_IN_ARGUMENTS`, which only the
+    /// all-hits query needs (it records hits through a filter callback). Off, first-hit and
+    /// occlusion queries run on scenes without it, and the first all-hits query builds a
+    /// second copy of the scene with it (kept until the instances change).
+    pub all_hits: bool,
 }
 
 impl Default for EmbreeParams {
@@ -83,6 +88,7 @@ impl Default for EmbreeParams {
             robust: false,
             threads: Some(1),
             coherent: true,
+            all_hits: true,
         }
     }
 }
@@ -96,8 +102,16 @@ pub struct Embree {
     /// The world box of every instance, grown a little (rays with `tmin < 0` are clipped to
     /// it: Embree searches `t >= 0` only).
     pub(crate) bounds: Aabb,
-    /// The top scene over the instances.
+    /// The top scene over the instances; with [`Self::direct`], the one mesh's scene.
     pub(crate) top: RTCScene,
+    /// One instance with the identity transform: the scene is that mesh's scene, with no
+    /// instance level (the BSP and obvhs skip it likewise). Its hits then carry no instance
+    /// id; queries report instance 0.
+    pub(crate) direct: bool,
+    /// Without [`EmbreeParams::all_hits`]: the input, for the copy all-hits queries build.
+    source: Option<Scene>,
+    /// That copy, built with filter functions in arguments on first use.
+    all_hits_twin: std::sync::OnceLock<Option<Box<Embree>>>,
     pub(crate) params: EmbreeParams,
     pub(crate) stats: BuildStats,
     /// Dropped last: the scenes above are released first (see `Drop`).
@@ -134,6 +148,9 @@ impl Embree {
             mesh_bounds: scene.meshes.iter().map(|m| m.bounds()).collect(),
             bounds: Aabb::EMPTY,
             top: core::ptr::null_mut(),
+            direct: false,
+            source: (!params.all_hits).then(|| scene.clone()),
+            all_hits_twin: std::sync::OnceLock::new(),
             params: *params,
             stats: BuildStats::default(),
             device,
@@ -154,8 +171,32 @@ impl Embree {
         Ok(e)
     }
 
+    /// The scene on which all-hits queries run: this one when built with
+    /// [`EmbreeParams::all_hits`], else the copy built with it on first use (`None` only
+    /// when that build failed, which it cannot once this scene was built).
+    pub(crate) fn all_hits_scene(&self) -> Option<&Embree> {
+        if self.params.all_hits {
+            return Some(self);
+        }
+        self.all_hits_twin
+            .get_or_init(|| {
+                let params = EmbreeParams {
+                    all_hits: true,
+                    ..self.params
+                };
+                let scene = self.source.as_ref()?;
+                Embree::build_scene(scene, &params).ok().map(Box::new)
+            })
+            .as_deref()
+    }
+
     fn scene_flags(&self) -> core::ffi::c_int {
-        ffi::SCENE_FLAG_FILTER_FUNCTION_IN_ARGUMENTS
+        let filter = if self.params.all_hits {
+            ffi::SCENE_FLAG_FILTER_FUNCTION_IN_ARGUMENTS
+        } else {
+            ffi::SCENE_FLAG_NONE
+        };
+        filter
             | if self.params.robust {
                 ffi::SCENE_FLAG_ROBUST
             } else {
@@ -241,13 +282,26 @@ impl Embree {
         coherent_accel::scene::validate_instances(instances, self.meshes.len())?;
         let start = Instant::now();
         let api = self.device.api;
-        if !self.top.is_null() {
+        if !self.top.is_null() && !self.direct {
             // SAFETY: the old top scene is live and released once; it holds its instances.
             unsafe { (api.release_scene)(self.top) };
-            self.top = core::ptr::null_mut();
         }
-        self.top = self.new_scene(self.params.top_quality)?;
-        for (i, inst) in instances.iter().enumerate() {
+        self.top = core::ptr::null_mut();
+        self.direct = false;
+        if let Some(s) = &mut self.source {
+            s.instances = instances.to_vec();
+        }
+        self.all_hits_twin = std::sync::OnceLock::new();
+        if let [one] = instances
+            && one.world_from_object == Affine3A::IDENTITY
+        {
+            // The mesh's scene is the whole scene: no instance level.
+            self.top = self.meshes[one.mesh];
+            self.direct = true;
+        } else {
+            self.top = self.new_scene(self.params.top_quality)?;
+        }
+        for (i, inst) in instances.iter().enumerate().filter(|_| !self.direct) {
             // SAFETY: a live device; instance is a geometry type of every Embree 4.
             let geom = unsafe { (api.new_geometry)(self.device.raw, ffi::GEOMETRY_TYPE_INSTANCE) };
             self.device.check("create an instance")?;
@@ -268,9 +322,11 @@ impl Embree {
             }
             self.device.check("attach an instance")?;
         }
-        // SAFETY: a live scene whose geometries are committed.
-        unsafe { (api.commit_scene)(self.top) };
-        self.device.check("build the top level")?;
+        if !self.direct {
+            // SAFETY: a live scene whose geometries are committed.
+            unsafe { (api.commit_scene)(self.top) };
+            self.device.check("build the top level")?;
+        }
         let world = instances.iter().fold(Aabb::EMPTY, |b, i| {
             b.union(self.mesh_bounds[i.mesh].transformed(&i.world_from_object))
         });
@@ -318,7 +374,7 @@ impl Drop for Embree {
         let api = self.device.api;
         // SAFETY: every handle is live and released once, before the device.
         unsafe {
-            if !self.top.is_null() {
+            if !self.top.is_null() && !self.direct {
                 (api.release_scene)(self.top);
             }
             for &s in &self.meshes {

@@ -62,6 +62,9 @@ pub struct Obvhs {
     bounds: coherent_accel::Aabb,
     params: ObvhsParams,
     stats: BuildStats,
+    /// One instance with the identity transform: rays go straight into its mesh's tree, with
+    /// no top level (the BSP and Embree skip it likewise).
+    direct: Option<usize>,
 }
 
 /// The non-degenerate triangles of a (validated) mesh, as obvhs triangles, with their
@@ -90,6 +93,23 @@ fn world_box(mesh: &Mesh, inst: &Placed) -> Aabb {
         b.extend(inst.world_from_object.transform_point3a(corner));
     }
     b
+}
+
+/// Counts triangle tests (`()` counts nothing).
+trait TestCount {
+    fn tri(&self);
+}
+
+impl TestCount for () {
+    #[inline(always)]
+    fn tri(&self) {}
+}
+
+impl TestCount for core::cell::Cell<u64> {
+    #[inline(always)]
+    fn tri(&self) {
+        self.set(self.get() + 1);
+    }
 }
 
 /// Distance to `tri` along `ray` within `[tmin, tmax]`, or infinity (obvhs' Möller-Trumbore).
@@ -140,6 +160,7 @@ impl Obvhs {
             bounds: coherent_accel::Aabb::EMPTY,
             params: *params,
             stats,
+            direct: None,
         };
         o.place(&scene.instances, object_from_world);
         o.stats.build_seconds = start.elapsed().as_secs_f64();
@@ -179,6 +200,10 @@ impl Obvhs {
             coherent_accel::Aabb::new(world.min - margin, world.max + margin)
         };
         self.top = Tree::over_boxes(self.params.kind, &boxes, self.params.top_preset);
+        self.direct = match instances {
+            [one] if one.world_from_object == Affine3A::IDENTITY => Some(one.mesh),
+            _ => None,
+        };
         self.stats.instances = instances.len();
         self.stats.top_build_seconds = start.elapsed().as_secs_f64();
     }
@@ -224,21 +249,53 @@ impl Obvhs {
 
     /// First hit of one ray.
     pub(crate) fn first_hit1(&self, r: &Ray1) -> Option<Hit1> {
+        self.first_hit1_c(r, &())
+    }
+
+    /// Triangle tests one ray's first-hit (or, with `occlusion`, any-hit) query makes: the
+    /// BVH's side of the traversal counters the `accel` experiment reports beside the BSP's.
+    pub fn triangle_tests1(&self, r: &Ray1, occlusion: bool) -> u64 {
+        let c = core::cell::Cell::new(0);
+        if occlusion {
+            self.any_hit1_c(r, &c);
+        } else {
+            self.first_hit1_c(r, &c);
+        }
+        c.get()
+    }
+
+    #[inline(always)]
+    fn first_hit1_c(&self, r: &Ray1, c: &impl TestCount) -> Option<Hit1> {
         if !r.is_valid() {
             return None;
         }
         let (r, shift) = r.forward(&self.bounds)?;
         let world = world_ray(&r);
+        if let Some(m) = self.direct {
+            let mesh = &self.meshes[m];
+            let (k, t) = mesh.tree.closest(world, |lr, t| {
+                c.tri();
+                hit_t(&mesh.tris[t as usize], lr)
+            })?;
+            let (u, v) = barycentrics(&mesh.tris[k as usize], &world);
+            return Some(Hit1 {
+                t: t + shift,
+                u,
+                v,
+                prim: mesh.prims[k as usize],
+                inst: 0,
+            });
+        }
         let mut best: Option<(u32, u32, Ray)> = None;
         let found = self.top.closest(world, |ray, i| {
             let i = self.top_ids[i as usize];
             let inst = &self.instances[i as usize];
             let mesh = &self.meshes[inst.mesh];
             let local = self.object_ray(inst, ray, ray.tmax);
-            match mesh
-                .tree
-                .closest(local, |lr, t| hit_t(&mesh.tris[t as usize], lr))
-            {
+            match mesh.tree.closest(local, |lr, t| {
+                c.tri();
+                hit_t(&mesh.tris[t as usize], lr)
+            }) {
                 Some((prim, t)) if t < ray.tmax => {
                     best = Some((i, prim, local));
                     t
@@ -260,6 +317,11 @@ impl Obvhs {
 
     /// Whether anything lies on the ray's segment.
     pub(crate) fn any_hit1(&self, r: &Ray1) -> bool {
+        self.any_hit1_c(r, &())
+    }
+
+    #[inline(always)]
+    fn any_hit1_c(&self, r: &Ray1, c: &impl TestCount) -> bool {
         if !r.is_valid() {
             return false;
         }
@@ -267,15 +329,22 @@ impl Obvhs {
             return false;
         };
         let world = world_ray(&r);
+        if let Some(m) = self.direct {
+            let mesh = &self.meshes[m];
+            return mesh.tree.any(world, |lr, t| {
+                c.tri();
+                hit_t(&mesh.tris[t as usize], lr)
+            });
+        }
         self.top.any(world, |ray, i| {
             let i = self.top_ids[i as usize];
             let inst = &self.instances[i as usize];
             let mesh = &self.meshes[inst.mesh];
             let local = self.object_ray(inst, ray, ray.tmax);
-            if mesh
-                .tree
-                .any(local, |lr, t| hit_t(&mesh.tris[t as usize], lr))
-            {
+            if mesh.tree.any(local, |lr, t| {
+                c.tri();
+                hit_t(&mesh.tris[t as usize], lr)
+            }) {
                 0.0
             } else {
                 f32::INFINITY
@@ -294,6 +363,25 @@ impl Obvhs {
         };
         let world = world_ray(&r);
         let mut seen: Vec<(u32, u32)> = Vec::new();
+        if let Some(m) = self.direct {
+            let mesh = &self.meshes[m];
+            mesh.tree.each(world, |lr, k| {
+                let tri = &mesh.tris[k as usize];
+                let t = hit_t(tri, lr);
+                if t.is_finite() && !seen.contains(&(0, k)) {
+                    seen.push((0, k));
+                    let (u, v) = barycentrics(tri, lr);
+                    f(Hit1 {
+                        t: t + shift,
+                        u,
+                        v,
+                        prim: mesh.prims[k as usize],
+                        inst: 0,
+                    });
+                }
+            });
+            return;
+        }
         self.top.each(world, |ray, i| {
             let i = self.top_ids[i as usize];
             let inst = &self.instances[i as usize];
