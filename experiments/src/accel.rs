@@ -1271,3 +1271,34 @@ fn read_either(ctx: &Ctx, file: &str, header: &[&str]) -> anyhow::Result<Option<
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pass(hits: u64, t_sum: f64) -> PassResult {
+        PassResult {
+            seconds: 1.0,
+            hits,
+            t_sum,
+        }
+    }
+
+    #[test]
+    fn the_cross_check_allows_edge_rays_and_nothing_more() {
+        let bsp = pass(10_000, 50_000.0);
+        // Same answers, rounding in t, a few edge rays: agree.
+        assert_eq!(disagreement(&bsp, &pass(10_000, 50_000.4), 20_000), None);
+        assert_eq!(disagreement(&bsp, &pass(10_019, 50_095.0), 20_000), None);
+        // Missing hits beyond 0.1% of the rays + 2.
+        assert!(disagreement(&bsp, &pass(9_970, 49_850.0), 20_000).is_some());
+        // Right count, wrong (farther) hits.
+        assert!(disagreement(&bsp, &pass(10_000, 50_100.0), 20_000).is_some());
+        // Occlusion rows (t_sum 0) compare counts only.
+        assert_eq!(
+            disagreement(&pass(7107, 0.0), &pass(7106, 0.0), 10_000),
+            None
+        );
+        assert!(disagreement(&pass(7107, 0.0), &pass(7000, 0.0), 10_000).is_some());
+    }
+}
