@@ -40,7 +40,7 @@ const FILE: &str = "aa.csv";
 /// The contract's columns, then the adaptive run's accuracy (empty for uniform).
 const HEADER: &[&str] = &["method", "rays", "seconds", "rmse", "accuracy"];
 /// The adaptive runs' accuracies (display difference of the two screen matrices).
-const ACCURACIES: [f32; 3] = [0.02, 0.01, 0.005];
+const ACCURACIES: [f32; 4] = [0.02, 0.01, 0.005, 0.0025];
 const GROUPS_FILE: &str = "aa_groups.csv";
 const GROUPS_HEADER: &[&str] = &[
     "method",
@@ -373,6 +373,8 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     for (name, pts) in curves.iter().filter(|c| c.0 != "uniform") {
         let Some(&a) = pts.last() else { continue };
         let r = reach(pts, u.2);
+        // The other way round: what uniform needs for this run's final quality.
+        let back = reach(&uni, a.2);
         rows.push(vec![
             name.clone(),
             fmt_num(a.0),
@@ -382,6 +384,9 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
                 format!("{} ({:.3} s)", fmt_num(r.0), r.1)
             }),
             r.map_or("-".into(), |r| format!("{:.2}x", u.0 / r.0)),
+            back.map_or("not reached".into(), |b| {
+                format!("{} ({:.2}x)", fmt_num(b.0), b.0 / a.0)
+            }),
         ]);
     }
     md.push_str(&markdown_table(

@@ -365,6 +365,92 @@ impl coherent_simd::Kernel for ImageKernel<'_> {
     }
 }
 
+/// Planar (structure-of-arrays) colour channels, as packets hold them.
+pub struct Planar<'a> {
+    pub r: &'a [f32],
+    pub g: &'a [f32],
+    pub b: &'a [f32],
+}
+
+/// Planar output channels.
+pub struct PlanarMut<'a> {
+    pub r: &'a mut [f32],
+    pub g: &'a mut [f32],
+    pub b: &'a mut [f32],
+}
+
+/// Tone-maps planar channels (all the same length) in packets of the backend's width,
+/// loading and storing whole packets: the layout of a packet renderer's radiance, and the
+/// form the `kernels` experiment times.
+pub fn apply_planar(
+    backend: coherent_simd::Backend,
+    t: &ToneMap,
+    px: Planar<'_>,
+    out: PlanarMut<'_>,
+) -> Result<(), coherent_simd::BackendError> {
+    let n = px.r.len();
+    assert!(
+        px.g.len() == n
+            && px.b.len() == n
+            && out.r.len() == n
+            && out.g.len() == n
+            && out.b.len() == n,
+        "tone mapping: channel lengths differ"
+    );
+    backend.run(PlanarKernel { t, px, out })
+}
+
+struct PlanarKernel<'a> {
+    t: &'a ToneMap,
+    px: Planar<'a>,
+    out: PlanarMut<'a>,
+}
+
+impl coherent_simd::Kernel for PlanarKernel<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) {
+        let n = self.px.r.len();
+        let full = n - n % L::N;
+        let mut i = 0;
+        while i < full {
+            let c = self.t.apply(
+                l,
+                Rgbs::new(
+                    l.load(&self.px.r[i..]),
+                    l.load(&self.px.g[i..]),
+                    l.load(&self.px.b[i..]),
+                ),
+            );
+            c.r.store(&mut self.out.r[i..]);
+            c.g.store(&mut self.out.g[i..]);
+            c.b.store(&mut self.out.b[i..]);
+            i += L::N;
+        }
+        // The tail, through a padded packet.
+        if full < n {
+            let mut buf = [[0.0f32; coherent_simd::MAX_LANES]; 3];
+            for m in 0..n - full {
+                buf[0][m] = self.px.r[full + m];
+                buf[1][m] = self.px.g[full + m];
+                buf[2][m] = self.px.b[full + m];
+            }
+            let c = self.t.apply(
+                l,
+                Rgbs::new(l.load(&buf[0]), l.load(&buf[1]), l.load(&buf[2])),
+            );
+            c.r.store(&mut buf[0]);
+            c.g.store(&mut buf[1]);
+            c.b.store(&mut buf[2]);
+            for m in 0..n - full {
+                self.out.r[full + m] = buf[0][m];
+                self.out.g[full + m] = buf[1][m];
+                self.out.b[full + m] = buf[2][m];
+            }
+        }
+    }
+}
+
 /// A coherent HDR test image for timing and accuracy (the `kernels` experiment): a smooth
 /// coloured gradient over four decades of luminance, like neighbouring rendered pixels.
 pub fn workload_image(n: usize) -> Vec<[f32; 3]> {

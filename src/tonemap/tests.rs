@@ -167,3 +167,42 @@ fn black_and_constant_images_are_safe() {
         }
     }
 }
+
+#[test]
+fn planar_matches_interleaved_on_every_backend() {
+    let img = hdr_image(1001);
+    let a = Adaptation::from_luminances(img.iter().map(|c| lum(*c)));
+    let t = ToneMap::new(Operator::Tumblin, a, Display::default());
+    let (r, g, b): (Vec<f32>, Vec<f32>, Vec<f32>) = (
+        img.iter().map(|c| c[0]).collect(),
+        img.iter().map(|c| c[1]).collect(),
+        img.iter().map(|c| c[2]).collect(),
+    );
+    for be in Backend::available() {
+        let want = apply_image(be, &t, &img).unwrap();
+        let (mut or, mut og, mut ob) = (vec![0.0; 1001], vec![0.0; 1001], vec![0.0; 1001]);
+        apply_planar(
+            be,
+            &t,
+            Planar {
+                r: &r,
+                g: &g,
+                b: &b,
+            },
+            PlanarMut {
+                r: &mut or,
+                g: &mut og,
+                b: &mut ob,
+            },
+        )
+        .unwrap();
+        for i in 0..1001 {
+            let got = [or[i], og[i], ob[i]];
+            assert!(
+                got == want[i] || (got[0].is_nan() && want[i][0].is_nan()),
+                "{be} pixel {i}: {got:?} vs {:?}",
+                want[i]
+            );
+        }
+    }
+}
