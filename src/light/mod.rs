@@ -49,7 +49,7 @@ pub use spot::{Spot, SpotFalloff};
 pub use strata::Strata;
 
 /// A light of any kind.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Light {
     Omni(Omni),
     Spot(Spot),
