@@ -21,6 +21,7 @@ pub use table::{PaperTable, Table};
 pub use timing::{Timing, speedup};
 
 // The experiments, one module each.
+pub mod aa;
 pub mod accel;
 pub mod kernels;
 pub mod table1;
@@ -49,11 +50,5 @@ pub const EXPERIMENTS: &[Experiment] = &[
         &["table5_threads.csv"],
         None,
     ),
-    Experiment::planned(
-        "aa",
-        "adaptive anti-aliasing with two screen matrices: time against accuracy",
-        "section 6.2",
-        &[],
-        None,
-    ),
+    aa::EXPERIMENT,
 ];

@@ -124,6 +124,16 @@ impl Table {
         })
     }
 
+    /// Rows (without the header).
+    pub fn len(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// Whether there are no rows.
+    pub fn is_empty(&self) -> bool {
+        self.rows.is_empty()
+    }
+
     /// The index of column `name`.
     pub fn col(&self, name: &str) -> anyhow::Result<usize> {
         self.header

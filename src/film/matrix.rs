@@ -2,8 +2,25 @@
 //! sum and a sample count per pixel; a pixel's samples go alternately to one and the other,
 //! and the difference of their estimates measures the accuracy.
 
-use super::accuracy::relative_difference;
+use super::accuracy::display_difference;
 use super::superpixel::Superpixels;
+use crate::tonemap::ToneMap;
+
+/// Which matrix sample number `k` of pixel `p` goes to. Not simply `k % 2`: a pixel's
+/// Halton samples of even and odd `k` lie in its left and right halves (the lowest binary
+/// digit of the index above the tile's digits is `k`'s), so the two matrices would estimate
+/// different things and never agree at an edge. Each pair `(2j, 2j + 1)` is split between
+/// the matrices, which one gets the first decided by a hash of `(p, j)`: each matrix gets
+/// half the samples, stratified in expectation.
+#[inline]
+pub fn matrix_of(p: u64, k: u64) -> usize {
+    let mut h =
+        p.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ (k >> 1).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    h ^= h >> 31;
+    h = h.wrapping_mul(0x94d0_49bb_1331_11eb);
+    h ^= h >> 29;
+    ((k ^ (h >> 7)) & 1) as usize
+}
 
 /// Colour sums and sample counts per pixel.
 #[derive(Clone, Debug, PartialEq)]
@@ -42,12 +59,12 @@ pub struct Film {
     /// Pixels whose value is interpolated from their superpixel's corners (until they have
     /// samples in both matrices).
     pub interpolated: Vec<bool>,
-    /// Noise floor of the accuracy measure (see [`relative_difference`]).
-    pub floor: f32,
+    /// The tone mapping the accuracy is measured through (see [`display_difference`]).
+    pub tonemap: ToneMap,
 }
 
 impl Film {
-    pub(crate) fn new(width: u32, height: u32, superpixels: Superpixels, floor: f32) -> Film {
+    pub(crate) fn new(width: u32, height: u32, superpixels: Superpixels, tonemap: ToneMap) -> Film {
         let n = width as usize * height as usize;
         Film {
             width,
@@ -55,7 +72,7 @@ impl Film {
             matrices: [ScreenMatrix::new(n), ScreenMatrix::new(n)],
             superpixels,
             interpolated: vec![false; n],
-            floor,
+            tonemap,
         }
     }
 
@@ -68,22 +85,22 @@ impl Film {
         self.matrices[0].count[p] + self.matrices[1].count[p]
     }
 
-    /// Adds sample number `k` of pixel `p` (to matrix `k % 2`).
+    /// Adds sample number `k` of pixel `p` to matrix [`matrix_of`]`(p, k)`.
     #[inline]
     pub(crate) fn add(&mut self, p: usize, k: u64, c: [f32; 3]) {
-        let m = &mut self.matrices[(k % 2) as usize];
+        let m = &mut self.matrices[matrix_of(p as u64, k)];
         m.count[p] += 1;
         for (s, v) in m.sum[p].iter_mut().zip(c) {
             *s += v as f64;
         }
     }
 
-    /// The relative difference of the two matrices' estimates at `p`, or `None` unless both
+    /// The display difference of the two matrices' estimates at `p`, or `None` unless both
     /// have samples there.
     pub fn error(&self, p: usize) -> Option<f32> {
         let [a, b] = &self.matrices;
         (a.count[p] > 0 && b.count[p] > 0)
-            .then(|| relative_difference(a.mean(p), b.mean(p), self.floor))
+            .then(|| display_difference(&self.tonemap, a.mean(p), b.mean(p)))
     }
 
     /// The estimate of pixel `p`: the mean of all its samples; the superpixel interpolation

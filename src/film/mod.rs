@@ -16,8 +16,8 @@ mod tests;
 use std::path::PathBuf;
 use std::time::Duration;
 
-pub use accuracy::relative_difference;
-pub use matrix::{Film, ScreenMatrix};
+pub use accuracy::display_difference;
+pub use matrix::{Film, ScreenMatrix, matrix_of};
 pub use render::render;
 pub use superpixel::Superpixels;
 pub use tracer::SampleTracer;
@@ -31,8 +31,10 @@ use coherent_simd::BackendError;
 pub enum Method {
     /// The paper's progressive adaptive anti-aliasing: superpixels interpolated where their
     /// corners agree, then levels of growing span; a pixel is done when its two screen
-    /// matrices agree within `accuracy` (relative) over its 3x3 neighbourhood, or it has
-    /// `max_samples_per_pixel` samples. Stops when every pixel is done or the time runs out.
+    /// matrices agree within `accuracy` (in tone-mapped display units, 0-1) over its 3x3
+    /// neighbourhood, or it has `max_samples_per_pixel` samples (a pass may overshoot the cap
+    /// by less than one packet: a group traces all its lanes). Stops when every pixel is
+    /// done or the time runs out.
     Adaptive {
         accuracy: f32,
         max_samples_per_pixel: u32,
@@ -132,8 +134,8 @@ impl FilmOptions {
             ));
         }
         let corners = (w.div_ceil(sx) as u64 + 1) * (h.div_ceil(sy) as u64 + 1);
-        // Adaptive passes may overshoot the cap by one packet of samples per pixel.
-        let ids = corners + (spp as u64 + 16) * w as u64 * h as u64;
+        // Adaptive passes may overshoot the cap by a few packets of samples per pixel.
+        let ids = corners + (spp as u64 + 64) * w as u64 * h as u64;
         if ids > u32::MAX as u64 {
             return Err(FilmError::Options(format!(
                 "{spp} samples per pixel at {w}x{h}: more samples than 2^32 sample ids"
@@ -171,7 +173,7 @@ pub struct PassRecord {
     pub groups_skipped: u64,
     /// Seconds since the render started.
     pub seconds: f64,
-    /// Mean relative difference of the two screen matrices over pixels sampled in both.
+    /// Mean display difference of the two screen matrices over pixels sampled in both.
     pub error: f64,
     /// Fraction of pixels done (met the accuracy, interpolated or at the sample cap).
     pub done: f64,

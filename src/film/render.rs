@@ -3,6 +3,9 @@
 //! each calling `Backend::run`), accumulated in a fixed order so that the image does not
 //! depend on the thread count.
 
+// Per-packet code uses index loops over lanes (see the README's notes on pulp).
+#![allow(clippy::needless_range_loop)]
+
 use std::time::Instant;
 
 use coherent_simd::{Backend, Kernel, Lanes, MAX_LANES, SimdF32, SimdMask};
@@ -58,12 +61,11 @@ pub fn render<T: SampleTracer>(
         *c = fix(v, &mut fixups);
     }
     let adaptation = Adaptation::from_luminances(sp.corners.iter().map(|c| luminance(*c)));
-    let floor = (0.02 * adaptation.log_average).max(1e-12);
     let tonemap = ToneMap::new(opts.tonemap, adaptation, opts.display);
     let id_base = points.len() as u64;
     let mut rays = points.len() as u64;
 
-    let mut film = Film::new(w, h, sp, floor);
+    let mut film = Film::new(w, h, sp, tonemap);
     if let Method::Adaptive { accuracy, .. } = opts.method {
         mark_interpolated(&mut film, accuracy);
     }
@@ -78,7 +80,7 @@ pub fn render<T: SampleTracer>(
         groups_skipped: 0,
         seconds: start.elapsed().as_secs_f64(),
         error: f64::NAN,
-        done: done_fraction(&film, None),
+        done: covered_fraction(&film),
         coherence: Coherence::default(),
     };
     progress(&PassReport {
@@ -94,6 +96,7 @@ pub fn render<T: SampleTracer>(
     let levels = Span::levels(tile);
     let mut next_index = 0u64;
     let mut pass = 0u32;
+    let mut pending: Option<(Vec<bool>, bool)> = None;
     let stop = loop {
         // What this pass traces: an index range, its span, and which pixels still need rays.
         let (span, begin, end, need) = match opts.method {
@@ -112,7 +115,10 @@ pub fn render<T: SampleTracer>(
                 if pass > 0 && time_budget.is_some_and(|t| start.elapsed() >= t) {
                     break StopReason::TimeBudget;
                 }
-                let (need, capped) = needed(&film, accuracy, max_samples_per_pixel);
+                // Which pixels need rays: computed once per pass (after the previous one).
+                let (need, capped) = pending
+                    .take()
+                    .unwrap_or_else(|| needed(&film, accuracy, max_samples_per_pixel));
                 if !need.iter().any(|&n| n) {
                     break if capped {
                         StopReason::SampleBudget
@@ -172,6 +178,19 @@ pub fn render<T: SampleTracer>(
             0.0
         };
         rays += this_pass;
+        let done = match opts.method {
+            Method::Adaptive {
+                accuracy,
+                max_samples_per_pixel,
+                ..
+            } => {
+                let (need, capped) = needed(&film, accuracy, max_samples_per_pixel);
+                let done = need.iter().filter(|n| !**n).count() as f64 / film.pixels() as f64;
+                pending = Some((need, capped));
+                done
+            }
+            Method::Uniform { .. } => covered_fraction(&film),
+        };
         record = PassRecord {
             pass,
             span,
@@ -182,7 +201,7 @@ pub fn render<T: SampleTracer>(
             groups_skipped: skipped,
             seconds: start.elapsed().as_secs_f64(),
             error: mean_error(&film),
-            done: done_fraction(&film, Some(opts)),
+            done,
             coherence: coh,
         };
         progress(&PassReport {
@@ -234,7 +253,7 @@ fn mark_interpolated(film: &mut Film, accuracy: f32) {
     let sp = &film.superpixels;
     for v in 0..sp.ny {
         for u in 0..sp.nx {
-            if !sp.smooth(u, v, accuracy, film.floor) {
+            if !sp.smooth(u, v, accuracy, &film.tonemap) {
                 continue;
             }
             for y in v * sp.sy..((v + 1) * sp.sy).min(film.height) {
@@ -246,32 +265,32 @@ fn mark_interpolated(film: &mut Film, accuracy: f32) {
     }
 }
 
-/// The largest matrix difference over the 3x3 neighbourhood of `(x, y)` (neighbours without
-/// samples in both matrices are left out), or `None` if `(x, y)` itself has none.
-fn neighbourhood_error(film: &Film, x: u32, y: u32) -> Option<f32> {
-    let p = (y * film.width + x) as usize;
-    let mut e = film.error(p)?;
-    for ny in y.saturating_sub(1)..(y + 2).min(film.height) {
-        for nx in x.saturating_sub(1)..(x + 2).min(film.width) {
-            if let Some(q) = film.error((ny * film.width + nx) as usize) {
-                e = e.max(q);
-            }
-        }
-    }
-    Some(e)
-}
-
-/// Which pixels need more rays, and whether any stopped at the sample cap unconverged.
+/// Which pixels need more rays, and whether any stopped at the sample cap unconverged. A
+/// pixel is done when it is interpolated, or when it and every neighbour of its 3x3
+/// neighbourhood sampled in both matrices have a matrix difference within `accuracy`
+/// (neighbours make edges robust: two estimates of an edge pixel may agree by chance).
 fn needed(film: &Film, accuracy: f32, cap: u32) -> (Vec<bool>, bool) {
+    let (w, h) = (film.width, film.height);
+    let errors: Vec<Option<f32>> = (0..film.pixels()).map(|p| film.error(p)).collect();
     let mut capped = false;
     let mut need = vec![false; film.pixels()];
-    for y in 0..film.height {
-        for x in 0..film.width {
-            let p = (y * film.width + x) as usize;
+    for y in 0..h {
+        for x in 0..w {
+            let p = (y * w + x) as usize;
             if film.interpolated[p] {
                 continue;
             }
-            let met = neighbourhood_error(film, x, y).is_some_and(|e| e <= accuracy);
+            let met = errors[p].is_some() && {
+                let mut e = 0.0f32;
+                for ny in y.saturating_sub(1)..(y + 2).min(h) {
+                    for nx in x.saturating_sub(1)..(x + 2).min(w) {
+                        if let Some(q) = errors[(ny * w + nx) as usize] {
+                            e = e.max(q);
+                        }
+                    }
+                }
+                e <= accuracy
+            };
             if met {
                 continue;
             }
@@ -296,20 +315,12 @@ fn mean_error(film: &Film) -> f64 {
     if n == 0 { f64::NAN } else { s / n as f64 }
 }
 
-fn done_fraction(film: &Film, opts: Option<&FilmOptions>) -> f64 {
-    let done = match opts.map(|o| o.method) {
-        Some(Method::Adaptive {
-            accuracy,
-            max_samples_per_pixel,
-            ..
-        }) => {
-            let (need, _) = needed(film, accuracy, max_samples_per_pixel);
-            need.iter().filter(|n| !**n).count()
-        }
-        Some(Method::Uniform { .. }) => (0..film.pixels()).filter(|&p| film.samples(p) > 0).count(),
-        None => film.interpolated.iter().filter(|i| **i).count(),
-    };
-    done as f64 / film.pixels() as f64
+/// Fraction of pixels sampled or interpolated (the `done` of pre-render and uniform passes).
+fn covered_fraction(film: &Film) -> f64 {
+    let n = (0..film.pixels())
+        .filter(|&p| film.interpolated[p] || film.samples(p) > 0)
+        .count();
+    n as f64 / film.pixels() as f64
 }
 
 /// One tile's share of a pass.

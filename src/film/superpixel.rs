@@ -2,7 +2,11 @@
 //! both the low-resolution pre-render of tone mapping (section 6.1) and the values that
 //! pixels of smooth superpixels are bilinearly interpolated from.
 
-use super::accuracy::relative_difference;
+// Per-packet code uses index loops over lanes (see the README's notes on pulp).
+#![allow(clippy::needless_range_loop)]
+
+use super::accuracy::display_difference;
+use crate::tonemap::ToneMap;
 
 /// The corner grid: `(nx + 1) x (ny + 1)` corners for `nx x ny` superpixels of `sx x sy`
 /// pixels (the last row and column may be narrower, ending at the image border).
@@ -58,8 +62,9 @@ impl Superpixels {
         self.corners[(v * (self.nx + 1) + u) as usize]
     }
 
-    /// Whether superpixel `(u, v)`'s four corners differ pairwise by less than `accuracy`.
-    pub fn smooth(&self, u: u32, v: u32, accuracy: f32, floor: f32) -> bool {
+    /// Whether superpixel `(u, v)`'s four corners differ pairwise by less than `accuracy`
+    /// on the display.
+    pub fn smooth(&self, u: u32, v: u32, accuracy: f32, t: &ToneMap) -> bool {
         let c = [
             self.corner(u, v),
             self.corner(u + 1, v),
@@ -68,7 +73,7 @@ impl Superpixels {
         ];
         for i in 0..4 {
             for j in i + 1..4 {
-                if relative_difference(c[i], c[j], floor).partial_cmp(&accuracy)
+                if display_difference(t, c[i], c[j]).partial_cmp(&accuracy)
                     != Some(core::cmp::Ordering::Less)
                 {
                     return false;

@@ -139,7 +139,7 @@ fn adaptive_interpolates_a_constant_image_exactly() {
 fn adaptive_subdivides_a_step_edge_and_converges_on_it() {
     let t = Analytic::new(edge);
     let (w, h) = (48, 24);
-    let opts = FilmOptions::new(w, h, adaptive(0.02, 256));
+    let opts = FilmOptions::new(w, h, adaptive(0.05, 64));
     for b in Backend::available() {
         let r = render(b, &t, &opts, &quiet).unwrap();
         let img = r.image();
@@ -153,23 +153,26 @@ fn adaptive_subdivides_a_step_edge_and_converges_on_it() {
                 if x >= 24 {
                     assert!(r.film.interpolated[p], "{b}: ({x}, {y}) not interpolated");
                 }
-                // The edge pixel's value is its coverage, within the accuracy.
-                let want = if x < 13 {
+                // The edge pixel's value is its coverage, within twice the accuracy on the
+                // display.
+                let cover = if x < 13 {
                     1.0
                 } else if x == 13 {
-                    0.3 * 1.0 + 0.7 * 0.05
+                    0.3
                 } else {
-                    0.05
+                    0.0
                 };
-                assert!(
-                    (img[p][0] - want).abs() <= 0.05 * want.max(0.1),
-                    "{b}: ({x}, {y}) = {} want {want}",
-                    img[p][0]
-                );
+                let want = [
+                    cover + (1.0 - cover) * 0.05,
+                    cover * 0.8 + (1.0 - cover) * 0.05,
+                    cover * 0.6 + (1.0 - cover) * 0.05,
+                ];
+                let d = display_difference(&r.tonemap, img[p], want);
+                assert!(d <= 0.1, "{b}: ({x}, {y}) = {:?} want {want:?}", img[p]);
             }
         }
-        // Adaptivity: far fewer rays than the sample cap everywhere.
-        assert!(r.rays < (w * h * 16) as u64, "{b}: {} rays", r.rays);
+        // Adaptivity: fewer rays than 8 samples in every pixel (the cap is 64).
+        assert!(r.rays < (w * h * 8) as u64, "{b}: {} rays", r.rays);
         let edge_samples = r.film.samples((5 * w + 13) as usize);
         assert!(
             edge_samples >= 8,
@@ -194,8 +197,10 @@ fn error_estimate_decreases_as_passes_go() {
         e[0].is_nan() && e[1].is_nan(),
         "no estimate before both matrices have samples"
     );
-    assert!(e[32] < 0.5 * e[2], "errors {e:?}");
-    assert!(e[32] < e[8] && e[8] < e[2], "errors {e:?}");
+    // (From pass 3 on: at pass 2 each matrix holds one sample, and most edge pixels saw
+    // the same side twice.)
+    assert!(e[32] < 0.6 * e[3], "errors {e:?}");
+    assert!(e[32] < e[8] && e[8] < e[3], "errors {e:?}");
 }
 
 #[test]
@@ -346,4 +351,15 @@ fn images_are_written_and_bad_paths_named() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("y.png"), "{e}");
+}
+
+#[test]
+fn matrices_split_each_pair_of_samples() {
+    for p in 0..50u64 {
+        for j in 0..50u64 {
+            assert_ne!(matrix_of(p, 2 * j), matrix_of(p, 2 * j + 1));
+        }
+        let firsts = (0..50u64).filter(|j| matrix_of(p, 2 * j) == 0).count();
+        assert!((10..=40).contains(&firsts), "pixel {p}: {firsts} of 50");
+    }
 }

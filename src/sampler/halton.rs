@@ -65,7 +65,10 @@ impl HaltonTile {
 
     /// The sample of index `i`: pixel `(px, py)` in the tile and the offset `(fx, fy)` in
     /// `[0, 1)^2` inside it. `2^a phi_2(i) = px + phi_2(i >> a)`, exactly, and likewise in
-    /// base 3, so the pixel is found from integer digits with no rounding.
+    /// base 3, so the pixel is found from integer digits with no rounding. This is pbrt-v4's
+    /// arithmetic: `HaltonSampler::GetPixel2D` returns `(RadicalInverse(0, i >> a),
+    /// RadicalInverse(1, i / 3^b))` and `StartPixelSample` picks the index whose low digits
+    /// are the pixel's (reversed), stepping by `sampleStride = 2^a 3^b` per sample.
     #[inline]
     pub fn sample(self, i: u64) -> (u32, u32, f32, f32) {
         let px = reverse_low_digits(i, 2, self.a) as u32;

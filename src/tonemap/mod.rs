@@ -13,6 +13,9 @@
 //! Luminance is Rec. 709 luminance of the radiance, read as cd/m^2. Colours keep their
 //! chromaticity: every channel is scaled by `L_display / L`.
 
+// Per-packet code uses index loops over lanes (see the README's notes on pulp).
+#![allow(clippy::needless_range_loop)]
+
 use core::fmt;
 use core::str::FromStr;
 
@@ -20,7 +23,7 @@ use coherent_simd::approx::{EXP_MAX_REL_ERROR, LOG_MAX_ABS_ERROR, PowRange};
 use coherent_simd::{Lanes, Rgbs, SimdF32, SimdMask};
 
 /// A global tone-mapping operator.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Operator {
     /// Tumblin and Rushmeier 1993 (standing in for the paper's reference [22]).
     #[default]
@@ -64,20 +67,27 @@ impl FromStr for Operator {
     }
 }
 
-/// Display parameters: maximum display luminance (cd/m^2) and maximum contrast.
+/// Display parameters: maximum display luminance (cd/m^2) and maximum contrast, and how
+/// radiance converts to world luminance.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Display {
     pub l_dmax: f32,
     pub c_max: f32,
+    /// `Some(t)`: radiance is scaled so that the pre-render's log average is `t` cd/m^2 (an
+    /// exposure: renderers' radiance units are arbitrary, and Tumblin-Rushmeier and Ward
+    /// are absolute operators that show a scene of 1 cd/m^2 as nearly black). `None`:
+    /// radiance is read as cd/m^2.
+    pub world_log_average: Option<f32>,
 }
 
 impl Default for Display {
     /// A CRT-like display: 80 cd/m^2, contrast 36 (Tumblin and Rushmeier's defaults as
-    /// commonly implemented).
+    /// commonly implemented), world scaled to a log average of 50 cd/m^2 (a lit interior).
     fn default() -> Display {
         Display {
             l_dmax: 80.0,
             c_max: 36.0,
+            world_log_average: Some(50.0),
         }
     }
 }
@@ -154,17 +164,27 @@ impl ToneMap {
         if black {
             return t;
         }
-        let lavg = a.log_average as f64;
+        // World luminance = k * radiance luminance.
+        let k = match d.world_log_average {
+            Some(t) if t > 0.0 && t.is_finite() => t as f64 / a.log_average as f64,
+            _ => 1.0,
+        };
+        let lavg = a.log_average as f64 * k;
         let max = a.max as f64;
         match op {
             Operator::Tumblin => {
                 // log10 L_rw = log10 L_avg + 0.84; display adaptation L_da = L_dmax / sqrt(C_max).
+                // Checked against a second implementation, tizian/tonemapper's
+                // TumblinRushmeierOperator: same alpha, beta, final formula and defaults
+                // (80, 36); it also adds 0.84 to log10 L_da, which the 1993 form used here
+                // does on the world side only (an offset of the display curve, not of its shape).
                 let x_rw = lavg.log10() + 0.84;
                 let x_d = (d.l_dmax as f64 / (d.c_max as f64).sqrt()).log10();
                 let (a_rw, b_rw) = (tr_alpha(x_rw), tr_beta(x_rw));
                 let (a_d, b_d) = (tr_alpha(x_d), tr_beta(x_d));
                 let y = a_rw / a_d;
-                t.scale = (10f64.powf((b_rw - b_d) / a_d) / d.l_dmax as f64) as f32;
+                // (k L)^y = k^y L^y: the power runs on the radiance luminance.
+                t.scale = (k.powf(y) * 10f64.powf((b_rw - b_d) / a_d) / d.l_dmax as f64) as f32;
                 t.offset = 1.0 / d.c_max;
                 t.pow = PowRange::new(y as f32, a.max);
                 t.clamp_hi = (max * (13.0 / y.abs().max(1e-3)).exp()).min(f32::MAX as f64) as f32;
@@ -173,7 +193,9 @@ impl ToneMap {
                 }
             }
             Operator::Reinhard => {
+                // Relative: the world scale k cancels.
                 let key = 0.18;
+                let lavg = a.log_average as f64;
                 t.scale = (key / lavg) as f32;
                 let white = key / lavg * max;
                 t.offset = (1.0 / (white * white)) as f32;
@@ -181,7 +203,7 @@ impl ToneMap {
             Operator::Ward => {
                 let num = 1.219 + (d.l_dmax as f64 / 2.0).powf(0.4);
                 let den = 1.219 + lavg.powf(0.4);
-                t.scale = ((num / den).powf(2.5) / d.l_dmax as f64) as f32;
+                t.scale = (k * (num / den).powf(2.5) / d.l_dmax as f64) as f32;
             }
         }
         t
@@ -189,6 +211,11 @@ impl ToneMap {
 
     pub fn operator(&self) -> Operator {
         self.op
+    }
+
+    /// Whether everything maps to black (a black or empty pre-render).
+    pub fn is_black(&self) -> bool {
+        self.black
     }
 
     /// Largest absolute error of [`ToneMap::apply`]'s display luminance (in `[0, 1]`)
@@ -286,19 +313,32 @@ pub fn apply_image(
     t: &ToneMap,
     px: &[[f32; 3]],
 ) -> Result<Vec<[f32; 3]>, coherent_simd::BackendError> {
-    backend.run(ImageKernel { t, px })
+    let mut out = vec![[0.0f32; 3]; px.len()];
+    apply_into(backend, t, px, &mut out)?;
+    Ok(out)
+}
+
+/// Tone-maps `px` into `out` (the same length) in packets of the backend's width.
+pub fn apply_into(
+    backend: coherent_simd::Backend,
+    t: &ToneMap,
+    px: &[[f32; 3]],
+    out: &mut [[f32; 3]],
+) -> Result<(), coherent_simd::BackendError> {
+    assert_eq!(px.len(), out.len(), "tone mapping: output length");
+    backend.run(ImageKernel { t, px, out })
 }
 
 struct ImageKernel<'a> {
     t: &'a ToneMap,
     px: &'a [[f32; 3]],
+    out: &'a mut [[f32; 3]],
 }
 
 impl coherent_simd::Kernel for ImageKernel<'_> {
-    type Output = Vec<[f32; 3]>;
+    type Output = ();
     #[inline(always)]
-    fn run<L: Lanes>(self, l: L) -> Vec<[f32; 3]> {
-        let mut out = vec![[0.0f32; 3]; self.px.len()];
+    fn run<L: Lanes>(self, l: L) {
         let mut r = [0.0f32; coherent_simd::MAX_LANES];
         let mut g = [0.0f32; coherent_simd::MAX_LANES];
         let mut b = [0.0f32; coherent_simd::MAX_LANES];
@@ -318,10 +358,21 @@ impl coherent_simd::Kernel for ImageKernel<'_> {
             c.g.store(&mut g);
             c.b.store(&mut b);
             for m in 0..n {
-                out[i + m] = [r[m], g[m], b[m]];
+                self.out[i + m] = [r[m], g[m], b[m]];
             }
             i += n;
         }
-        out
     }
+}
+
+/// A coherent HDR test image for timing and accuracy (the `kernels` experiment): a smooth
+/// coloured gradient over four decades of luminance, like neighbouring rendered pixels.
+pub fn workload_image(n: usize) -> Vec<[f32; 3]> {
+    (0..n)
+        .map(|i| {
+            let t = i as f32 / n.max(1) as f32;
+            let l = 10f32.powf(-2.0 + 4.0 * t);
+            [l * (1.0 + 0.3 * (t * 40.0).sin()), l, l * (0.6 + 0.4 * t)]
+        })
+        .collect()
 }
