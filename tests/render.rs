@@ -31,7 +31,14 @@ fn scene(
     s.instances = (0..meshes.len()).map(Instance::identity).collect();
     s.meshes = meshes;
     s.materials = materials;
-    s.lights = lights;
+    // A scene must have a light or a background (an all-black image is refused). The test
+    // scenes' colours come from ambient, mirror and glass materials without diffuse or
+    // specular parts, which a far light does not change.
+    s.lights = if lights.is_empty() {
+        vec![omni(Vec3::new(0.0, 1.0e3, 0.0), [1.0; 3])]
+    } else {
+        lights
+    };
     s.camera = camera;
     s.depth = depth;
     s.background = [0.0; 3];
