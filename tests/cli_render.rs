@@ -1,0 +1,99 @@
+//! `coherent render` and `coherent scenes` as a user calls them (paper section 7's renderer
+//! behind the command line): a built-in scene renders to a PNG and an EXR with a summary line;
+//! bad input fails with a message naming the problem, never a panic.
+
+use std::process::{Command, Output};
+
+fn coherent(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_coherent"))
+        .args(args)
+        .output()
+        .expect("the coherent binary runs")
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+#[test]
+fn scenes_lists_the_built_in_scenes() {
+    let out = coherent(&["scenes"]);
+    assert!(out.status.success(), "{}", text(&out));
+    let listed = String::from_utf8_lossy(&out.stdout);
+    for name in ["car", "spdemo", "glass1", "room2", "cornell"] {
+        assert!(
+            listed.lines().any(|l| l.starts_with(name)),
+            "{name} missing from:\n{listed}"
+        );
+    }
+}
+
+#[test]
+fn a_built_in_scene_renders_to_png_and_exr_with_a_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    for file in ["cornell.png", "cornell.exr"] {
+        let path = dir.path().join(file);
+        let out = coherent(&[
+            "render",
+            "cornell",
+            "--resolution",
+            "32x24",
+            "--spp",
+            "1",
+            "--threads",
+            "1",
+            "--quiet",
+            "--out",
+            path.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", text(&out));
+        let written = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
+        assert!(written > 0, "{file} not written:\n{}", text(&out));
+        assert!(
+            text(&out).contains("Mrays/s"),
+            "no summary:\n{}",
+            text(&out)
+        );
+    }
+}
+
+#[test]
+fn bad_input_fails_with_a_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("x.png");
+    let png = png.to_str().unwrap();
+    let missing = dir.path().join("missing.toml");
+    let cases: [(Vec<&str>, &str); 5] = [
+        (
+            vec!["render", missing.to_str().unwrap(), "--out", png],
+            "missing.toml",
+        ),
+        (
+            vec!["render", "no-such-scene", "--out", png],
+            "no-such-scene",
+        ),
+        (
+            vec!["render", "cornell", "--resolution", "0x0", "--out", png],
+            "resolution",
+        ),
+        (
+            vec!["render", "cornell", "--backend", "avx1024", "--out", png],
+            "avx1024",
+        ),
+        (vec!["render", "cornell", "--out", "x.bmp"], "x.bmp"),
+    ];
+    for (args, needle) in cases {
+        let out = coherent(&args);
+        let said = text(&out);
+        assert!(!out.status.success(), "{args:?} succeeded:\n{said}");
+        assert!(!said.contains("panicked"), "{args:?} panicked:\n{said}");
+        assert!(
+            said.contains(needle),
+            "{args:?}: `{needle}` not in:\n{said}"
+        );
+    }
+}
