@@ -392,6 +392,26 @@ fn total_internal_reflection_starts_at_the_critical_angle() {
 
 /// A lit, textured, reflective and refractive scene: the built-in room with an omni light,
 /// a textured floor and depth 2.
+/// PSNR of `img` against `reference` leaving out the few pixels that differ most: at most
+/// one pixel in 256 (at least one). The accelerator contract lets a structure miss a hit
+/// within EDGE_EPS of a triangle's edge, so a ray along an edge may see another surface in
+/// one structure than in another: isolated pixels, which a 32 x 24 image's PSNR would
+/// otherwise turn into a failure. Returns the PSNR and how many pixels were left out.
+fn psnr_but_edge_pixels(img: &[[f32; 3]], reference: &[[f32; 3]], peak: f32) -> (f64, usize) {
+    let err = |a: &[f32; 3], b: &[f32; 3]| -> f32 { (0..3).map(|c| (a[c] - b[c]).powi(2)).sum() };
+    let mut order: Vec<usize> = (0..img.len()).collect();
+    order.sort_by(|&i, &j| err(&img[j], &reference[j]).total_cmp(&err(&img[i], &reference[i])));
+    let drop = (img.len() / 256).max(1);
+    let keep: Vec<usize> = order[drop..].to_vec();
+    let a: Vec<[f32; 3]> = keep.iter().map(|&i| img[i]).collect();
+    let b: Vec<[f32; 3]> = keep.iter().map(|&i| reference[i]).collect();
+    let dropped = order[..drop]
+        .iter()
+        .filter(|&&i| err(&img[i], &reference[i]) > 0.0)
+        .count();
+    (psnr(&a, &b, peak), dropped)
+}
+
 fn lit_scenes() -> Vec<RenderScene> {
     let mut out: Vec<RenderScene> = coherent::scene::builtin_names()
         .iter()
@@ -400,6 +420,12 @@ fn lit_scenes() -> Vec<RenderScene> {
     out.push(mirror_scene());
     out.push(slab_scene(1.5));
     for s in &mut out {
+        // Pixel centres of these symmetric scenes would otherwise run exactly along mesh
+        // edges (a quad's diagonal, a box's corner), where the accelerator contract lets a
+        // structure miss (within EDGE_EPS): move the camera off those lines by a fraction of
+        // a pixel.
+        s.camera.position += Vec3::new(1.234e-3, 0.717e-3, 0.0);
+        s.camera.look_at += Vec3::new(0.913e-3, -0.377e-3, 0.0);
         if s.lights.is_empty() {
             let c = s.camera.position;
             s.lights
@@ -462,10 +488,11 @@ fn every_backend_and_accelerator_renders_the_scalar_bsp_image() {
                 let Some(img) = render(sc, backend, kind) else {
                     continue;
                 };
-                let db = psnr(&img, &reference, peak);
+                let (db, dropped) = psnr_but_edge_pixels(&img, &reference, peak);
                 assert!(
                     db >= 40.0,
-                    "{}: {} + {kind}: PSNR {db:.1} dB against scalar + bsp",
+                    "{}: {} + {kind}: PSNR {db:.1} dB against scalar + bsp \
+                     (without its {dropped} most different pixel(s))",
                     sc.name,
                     backend.name()
                 );

@@ -413,7 +413,7 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
          scalar backend in the same run. Inputs are coherent sweeps of each domain: exp on \
          [-14, 0] (73% in the table part), log on (1e-6, 1] (17% in the table part), pow on \
          [0, 64] with y = 1/2.2 through the paper's range reduction, acos on [-1, 1], atan2 on \
-         [-1, 1]^2. Issue 2's targets for exp/log/pow: sse >= 3.5x, 8 lanes >= 6x, 16 lanes >= \
+         [-1, 1]^2. The project's targets for exp/log/pow: sse >= 3.5x, 8 lanes >= 6x, 16 lanes >= \
          10x. `texture_trilinear` (section 4.1): trilinear lookups in a 1024 x 1024 mipmapped \
          RGB texture at the texture coordinates of a floor seen by a pinhole camera (4 x 4 pixel \
          tiles), the mip level chosen per lane by successive halving of the hit distance (the \

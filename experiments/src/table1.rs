@@ -73,7 +73,7 @@ const PAPER: PaperTable = PaperTable {
 /// at each width (the bar chart shows every backend, `wide` included).
 const NATIVE: &[&str] = &["scalar", "sse", "pulp8", "pulp16"];
 
-/// Issue 5's targets for the speedup over scalar: `(lanes, target)`.
+/// The project's targets for the speedup over scalar: `(lanes, target)`.
 const TARGETS: &[(usize, f64)] = &[(4, 3.2), (8, 6.0), (16, 10.0)];
 
 fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
@@ -387,10 +387,10 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     let header: Vec<&str> = header.iter().map(String::as_str).collect();
     md.push_str(&markdown_table(&header, &rows));
 
-    // Targets of issue 5, against the largest call count measured.
+    // The project's targets, against the largest call count measured.
     if let Some(last) = t.distinct("calls")?.last() {
         md.push_str(&format!(
-            "\nIssue 5's targets (speedup over scalar at {last} calls; the paper's SSE gave 3.2x):\n\n"
+            "\nThe project's targets (speedup over scalar at {last} calls; the paper's SSE gave 3.2x):\n\n"
         ));
         let mut rows = Vec::new();
         for &(lanes, target) in TARGETS {
