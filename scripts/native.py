@@ -11,13 +11,26 @@
           .cache/photometry/.
   hdr     Real HDR latitude-longitude maps: the eight CC0 studio-light worlds of Debian's
           blender-data 3.4.1 (DWAB-compressed EXR, which the exr crate reads), into .cache/hdr/.
+  assimp  Khronos glTF 2.0 sample models out of Debian's assimp-testmodels 5.2.5 (the
+          2CylinderEngine and ClearCoat scenes), into .cache/scenes/assimp/.
+  cornell The Cornell box of blender-data's POV-Ray template cornell.pov (CC-BY 3.0, Kari
+          Kivisalo), converted by scripts/pov_cornell.py into OBJ + MTL, into
+          .cache/scenes/cornell/ (the same pinned blender-data download as `hdr`).
+  dungeon The CC0 castle dungeon glTF level of Debian's castle-game-engine-doc 7.0~alpha.2
+          (a 257 MB download): only when asked for by name (the full reproduce does), never
+          by default, into .cache/scenes/dungeon/.
+
+Debian packages are kept in .cache/debs/ once checked (the dungeon's is not: it is too
+large), so steps that share a package download it once.
 
 Idempotent and quiet when everything is in place: files already there are checked against
 their recorded sha256 and only fetched again when missing or changed. Exit status: 0 when
 Embree is usable (a mesh that cannot be fetched is a warning: the experiments say so and go
 on without it), 1 when Embree could not be set up (the message names the cause and the fix).
 
-Usage: python3 scripts/native.py [embree] [meshes] [photometry] [hdr]      (no argument: all)
+Usage: python3 scripts/native.py [embree] [meshes] [photometry] [hdr] [assimp] [cornell]
+                                 [dungeon]
+       (no argument: every step but dungeon)
 Environment: EMBREE_DIR=<an Embree 4 install> skips the wheel (the backend loads from there).
 """
 
@@ -38,6 +51,8 @@ NATIVE = ROOT / ".native"
 MESHES = ROOT / ".cache" / "meshes"
 PHOTOMETRY = ROOT / ".cache" / "photometry"
 HDR = ROOT / ".cache" / "hdr"
+SCENES = ROOT / ".cache" / "scenes"
+DEBS = ROOT / ".cache" / "debs"
 
 # Debian bookworm's blender-data: the studio-light world maps (CC0, see its license.txt).
 HDR_DEB = {
@@ -47,6 +62,37 @@ HDR_DEB = {
     "folder": "usr/share/blender/datafiles/studiolights/world",
     "members": ["city.exr", "courtyard.exr", "forest.exr", "interior.exr", "night.exr",
                 "studio.exr", "sunrise.exr", "sunset.exr", "license.txt"],
+}
+
+# Debian bookworm's assimp-testmodels: Khronos glTF 2.0 sample models (see the package's
+# copyright file; the Khronos samples are CC-BY 4.0 / public domain per model). Members:
+# (path inside the package, name in .cache/scenes/assimp/).
+ASSIMP_MODELS = "usr/share/assimp/models/glTF2"
+ASSIMP_DEB = {
+    "package": "assimp-testmodels",
+    "version": "5.2.5~ds0-1",
+    "sha256": "526f326186000cd6f631ea806128548a7d3d391abd8149fddc5c4c8513e80b8a",
+    "members": [(f"{ASSIMP_MODELS}/2CylinderEngine-glTF-Binary/2CylinderEngine.glb",
+                 "2CylinderEngine.glb")] + [
+        (f"{ASSIMP_MODELS}/ClearCoat-glTF/{name}", f"ClearCoat/{name}")
+        for name in ["ClearCoatTest.gltf", "ClearCoatTest.bin", "ClearCoatLabels.png",
+                     "PartialCoating.png", "PartialCoating_Alpha.png",
+                     "PlasticWrap_normals.jpg", "RibsNormal.png", "RoughnessStripes.png"]
+    ],
+}
+
+# The Cornell box POV-Ray template inside blender-data (the HDR maps' package).
+CORNELL_POV = "usr/share/blender/scripts/addons/render_povray/templates_pov/cornell.pov"
+
+# Debian bookworm's castle-game-engine-doc: the third-person example's CC0 dungeon level
+# (glTF 2.0, its buffer and textures; the .blend source is left out).
+DUNGEON_LEVEL = ("usr/share/doc/castle-game-engine-doc/examples/third_person_navigation/"
+                 "data/level")
+DUNGEON_DEB = {
+    "package": "castle-game-engine-doc",
+    "version": "7.0~alpha.2+dfsg1-5",
+    "sha256": "48a57969553317d938bdcfc7085f4784ae5d429a0c251b0cbd1457477f122693",
+    "size_mb": 257,
 }
 
 # The Embree 4.4 library as built by the embreex project (manylinux, x86-64). The wheel is
@@ -322,6 +368,65 @@ def setup_photometry():
         write_marker(PHOTOMETRY, sorted(names))
 
 
+def fetch_deb(spec, keep=True):
+    """The pinned .deb of `spec` (package, version, sha256), checked; kept in .cache/debs/
+    when `keep`, so that steps sharing a package download it once. Returns its path (in a
+    temporary folder the caller removes when not kept)."""
+    name = f"{spec['package']}_{spec['version'].replace(':', '%3a')}_all.deb"
+    kept = DEBS / name
+    if kept.exists() and sha256_of(kept) == spec["sha256"]:
+        return kept
+    DEBS.mkdir(parents=True, exist_ok=True)
+    size = f" ({spec['size_mb']} MB)" if "size_mb" in spec else ""
+    say(f"downloading Debian package {spec['package']}={spec['version']}{size}")
+    tmp = Path(tempfile.mkdtemp(dir=DEBS))
+    deb = apt_download(spec["package"], spec["version"], tmp)
+    verify(deb, spec["sha256"], f"{spec['package']}={spec['version']}")
+    if not keep:
+        return deb
+    os.replace(deb, kept)
+    shutil.rmtree(tmp, ignore_errors=True)
+    return kept
+
+
+def deb_extract(deb, wanted, out):
+    """Extracts members of a .deb's data archive (ar, then tar: python's own readers, so no
+    dpkg is needed and a large package is streamed, never unpacked whole). `wanted` maps a
+    path inside the package to a name under `out`; returns the names written. A wanted
+    member the package does not hold is an error naming it."""
+    import lzma  # noqa: F401  (tarfile needs it for data.tar.xz; fail here with its name)
+    with open(deb, "rb") as f:
+        if f.read(8) != b"!<arch>\n":
+            raise SetupError(f"{deb.name} is not a Debian package (no ar header)")
+        while True:
+            header = f.read(60)
+            if len(header) < 60:
+                raise SetupError(f"{deb.name} holds no data.tar archive")
+            member = header[:16].decode().strip().rstrip("/")
+            size = int(header[48:58].decode().strip())
+            if member.startswith("data.tar"):
+                break
+            f.seek(size + (size & 1), 1)
+        if member.endswith(".zst"):
+            raise SetupError(f"{deb.name}: {member} is zstd-compressed, which python's tarfile "
+                             "cannot read")
+        got, left = [], dict(wanted)
+        with tarfile.open(fileobj=f, mode="r|*") as tf:
+            for info in tf:
+                inner = info.name.removeprefix("./")
+                if inner in left and info.isfile():
+                    dest = out / left.pop(inner)
+                    dest.parent.mkdir(parents=True, exist_ok=True)
+                    with tf.extractfile(info) as src, open(dest, "wb") as dst:
+                        shutil.copyfileobj(src, dst)
+                    got.append(str(dest.relative_to(out)))
+                    if not left:
+                        break
+    if left:
+        raise SetupError(f"{deb.name} does not hold {sorted(left)}")
+    return got
+
+
 def setup_hdr():
     """Fetches the HDR maps; a failure is reported and the rest goes on."""
     if marker_ok(HDR):
@@ -330,19 +435,87 @@ def setup_hdr():
     try:
         say(f"fetching HDR maps from Debian package {spec['package']}={spec['version']} (31 MB)")
         HDR.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryDirectory(dir=HDR) as tmp:
-            deb = apt_download(spec["package"], spec["version"], tmp)
-            verify(deb, spec["sha256"], f"{spec['package']}={spec['version']}")
-            members = [(f"{spec['folder']}/{m}", m) for m in spec["members"]]
-            names = deb_members(deb, lambda _root: members, HDR)
+        deb = fetch_deb(spec)
+        members = {f"{spec['folder']}/{m}": m for m in spec["members"]}
+        names = deb_extract(deb, members, HDR)
         write_marker(HDR, names)
     except (SetupError, OSError) as e:
         say(f"warning: HDR maps unavailable: {e}")
 
 
+def setup_assimp():
+    """The Khronos glTF sample models; a failure is reported and the rest goes on."""
+    folder = SCENES / "assimp"
+    if marker_ok(folder):
+        return
+    spec = ASSIMP_DEB
+    try:
+        say(f"fetching glTF sample models from Debian package {spec['package']}="
+            f"{spec['version']} (21 MB)")
+        folder.mkdir(parents=True, exist_ok=True)
+        deb = fetch_deb(spec)
+        names = deb_extract(deb, dict(spec["members"]), folder)
+        write_marker(folder, names)
+    except (SetupError, OSError) as e:
+        say(f"warning: the engine and clearcoat scenes are unavailable: {e}")
+
+
+def setup_cornell():
+    """The Cornell box of blender-data's cornell.pov, converted to OBJ + MTL; a failure is
+    reported and the rest goes on."""
+    folder = SCENES / "cornell"
+    if marker_ok(folder):
+        return
+    try:
+        say("fetching cornell.pov (CC-BY 3.0) from Debian package "
+            f"{HDR_DEB['package']}={HDR_DEB['version']} and converting it")
+        folder.mkdir(parents=True, exist_ok=True)
+        deb = fetch_deb(HDR_DEB)
+        names = deb_extract(deb, {CORNELL_POV: "cornell.pov"}, folder)
+        sys.path.insert(0, str(Path(__file__).resolve().parent))
+        import pov_cornell
+        try:
+            names += pov_cornell.convert(folder / "cornell.pov", folder / "cornell.obj")
+        except pov_cornell.PovError as e:
+            raise SetupError(str(e)) from e
+        write_marker(folder, names)
+    except (SetupError, OSError) as e:
+        say(f"warning: the cornell scene is unavailable: {e}")
+
+
+def setup_dungeon():
+    """The castle dungeon level (a 257 MB package, not kept once extracted); a failure is
+    reported and the rest goes on."""
+    folder = SCENES / "dungeon"
+    if marker_ok(folder):
+        return
+    spec = DUNGEON_DEB
+    deb = None
+    try:
+        say("fetching the castle dungeon glTF level (CC0) from Debian package "
+            f"{spec['package']}={spec['version']}")
+        folder.mkdir(parents=True, exist_ok=True)
+        deb = fetch_deb(spec, keep=False)
+        gltf = f"{DUNGEON_LEVEL}/level-dungeon.gltf"
+        names = deb_extract(deb, {gltf: "level-dungeon.gltf"}, folder)
+        # Then what the glTF refers to: its buffers and images.
+        doc = json.loads((folder / "level-dungeon.gltf").read_text())
+        uris = [b["uri"] for b in doc.get("buffers", []) if "uri" in b]
+        uris += [i["uri"] for i in doc.get("images", []) if "uri" in i]
+        refs = {f"{DUNGEON_LEVEL}/{u}": u for u in uris if not u.startswith("data:")}
+        names += deb_extract(deb, refs, folder)
+        write_marker(folder, names)
+    except (SetupError, OSError, ValueError, KeyError) as e:
+        say(f"warning: the dungeon scene is unavailable: {e}")
+    finally:
+        if deb is not None and deb.parent != DEBS:
+            shutil.rmtree(deb.parent, ignore_errors=True)
+
+
 def main(argv):
-    steps = {"embree", "meshes", "photometry", "hdr"}
-    what = set(argv) or steps
+    default = {"embree", "meshes", "photometry", "hdr", "assimp", "cornell"}
+    steps = default | {"dungeon"}
+    what = set(argv) or default
     unknown = what - steps
     if unknown:
         say(f"unknown step(s) {sorted(unknown)}; steps are: {' '.join(sorted(steps))}")
@@ -361,6 +534,12 @@ def main(argv):
         setup_photometry()
     if "hdr" in what:
         setup_hdr()
+    if "assimp" in what:
+        setup_assimp()
+    if "cornell" in what:
+        setup_cornell()
+    if "dungeon" in what:
+        setup_dungeon()
     return status
 
 
