@@ -473,6 +473,7 @@ def setup_cornell():
         deb = fetch_deb(HDR_DEB)
         names = deb_extract(deb, {CORNELL_POV: "cornell.pov"}, folder)
         sys.path.insert(0, str(Path(__file__).resolve().parent))
+        sys.dont_write_bytecode = True  # no __pycache__ in scripts/
         import pov_cornell
         try:
             names += pov_cornell.convert(folder / "cornell.pov", folder / "cornell.obj")

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Regenerates results/ (or --out DIR): fetches the pinned native pieces (Embree, meshes),
+# Regenerates results/ (or --out DIR): fetches the pinned native pieces (Embree, meshes,
+# HDR maps, real scenes; the dungeon scene only without --quick),
 # then runs `reproduce` in release mode with the arguments given, e.g.
 #   scripts/reproduce.sh --quick --only accel --out /tmp/results
 #
@@ -25,6 +26,13 @@ while (($#)); do
     esac
     shift
 done
+# The full run also renders the castle dungeon scene, whose package is a 257 MB download:
+# fetched here only when the run is not --quick.
+quick=0
+for a in "${args[@]}"; do [[ "$a" == --quick ]] && quick=1; done
+if ((!quick)); then
+    python3 scripts/native.py dungeon
+fi
 if ((native)); then
     RUSTFLAGS="${RUSTFLAGS:-} -C target-cpu=native" CARGO_TARGET_DIR=target/native \
         cargo run --release -p coherent-experiments --bin reproduce -- "${args[@]}" --out "$out/native"

@@ -53,9 +53,70 @@ pub enum SceneError {
         #[source]
         source: MaterialError,
     },
+    /// A file the project's set-up fetches (`scripts/native.py`: named by the scene file's
+    /// `[assets]` table, or anything under `.cache/`) that is missing or cannot be read:
+    /// the message names the scene file, the field, the asset and the command that fetches
+    /// it (again).
+    #[error(
+        "{path}:{line}: {field}: asset {asset} {problem}; {}",
+        fetch_hint(step.as_deref(), *on_demand, *missing)
+    )]
+    Asset {
+        /// The scene file.
+        path: PathBuf,
+        line: usize,
+        field: String,
+        /// The asset as found (the scene file's folder joined with the path it gives).
+        asset: PathBuf,
+        /// "is missing" or "cannot be read: ...".
+        problem: String,
+        /// The `scripts/native.py` step that fetches it, when the scene file names one.
+        step: Option<String>,
+        /// Fetched only when asked for by name (a large download the tests never make).
+        on_demand: bool,
+        /// Missing (not fetched), rather than present and unreadable.
+        missing: bool,
+    },
     /// Neither a file nor a built-in scene.
     #[error("no scene {spec:?}: not a file, and not a built-in scene (built in: {known})")]
     Unknown { spec: String, known: String },
+}
+
+/// How to fetch an asset (again), for [`SceneError::Asset`].
+fn fetch_hint(step: Option<&str>, on_demand: bool, missing: bool) -> String {
+    let cmd = match step {
+        Some(s) => format!("python3 scripts/native.py {s}"),
+        None => "python3 scripts/native.py".to_string(),
+    };
+    let mut out = if missing {
+        format!("it is not fetched: run `{cmd}` (the project's set-up fetches it, pinned and checked)")
+    } else {
+        format!(
+            "it is fetched by the project's set-up: run `{cmd}` to fetch it again (every file \
+             is checked against its recorded sha256 and replaced when it differs)"
+        )
+    };
+    if on_demand {
+        out.push_str(
+            "; a large download, fetched only when asked for by name (`scripts/reproduce.sh` \
+             without --quick does)",
+        );
+    }
+    out
+}
+
+impl SceneError {
+    /// Whether this is an asset the project's set-up has not fetched: a scene that reports
+    /// it is skipped by the experiments and the scene tests (with this message).
+    pub fn is_missing_asset(&self) -> bool {
+        matches!(self, SceneError::Asset { missing: true, .. })
+    }
+
+    /// Whether the asset at fault is fetched only when asked for by name (see
+    /// [`SceneError::Asset`]).
+    pub fn is_on_demand_asset(&self) -> bool {
+        matches!(self, SceneError::Asset { on_demand: true, .. })
+    }
 }
 
 fn line_suffix(line: usize) -> String {

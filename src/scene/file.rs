@@ -1,7 +1,9 @@
 //! The TOML scene file (paper section 7: a scene is meshes placed by transforms, materials,
 //! lights, a camera and the rendering settings): parsed through `serde` with unknown keys
 //! rejected, paths relative to the scene file, and every error naming the file, the line
-//! and the problem.
+//! and the problem. A file under a `.cache` folder is an asset the project's set-up fetches:
+//! missing or unreadable, it is a [`SceneError::Asset`] naming it and the command that
+//! fetches it.
 //!
 //! ```toml
 //! resolution = [1024, 768]        # default 1024 x 768
@@ -35,6 +37,10 @@
 //!                                 # | environment (file = "sky.exr")
 //! position = [0, 3, 0]
 //! intensity = [10, 10, 10]
+//!
+//! [assets]                        # optional: files under `.cache/` come from the set-up
+//! fetch = "assimp hdr"            # the `scripts/native.py` steps that fetch them
+//! on_demand = false               # true: fetched only when asked for by name
 //! ```
 
 use std::collections::{BTreeMap, HashMap};
@@ -74,6 +80,18 @@ struct SceneSpec {
     objects: Vec<Spanned<ObjectSpec>>,
     #[serde(default)]
     lights: Vec<Spanned<LightSpec>>,
+    assets: Option<AssetsSpec>,
+}
+
+/// Where a scene's fetched files (those under `.cache/`) come from.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AssetsSpec {
+    /// The `scripts/native.py` steps that fetch them (space-separated).
+    fetch: String,
+    /// Fetched only when that step is asked for by name (a large download).
+    #[serde(default)]
+    on_demand: bool,
 }
 
 #[derive(Debug, Deserialize)]
@@ -282,6 +300,8 @@ struct Source<'a> {
     path: &'a Path,
     text: &'a str,
     dir: PathBuf,
+    /// The scene file's `[assets]` table: (step, on_demand).
+    assets: Option<(String, bool)>,
 }
 
 impl Source<'_> {
@@ -307,6 +327,104 @@ impl Source<'_> {
     fn resolve(&self, p: &str) -> PathBuf {
         self.dir.join(p)
     }
+
+    /// Whether `p` (as the scene file gives it) is fetched by the project's set-up: a path
+    /// through a `.cache` folder.
+    fn is_fetched(p: &Path) -> bool {
+        p.components().any(|c| c.as_os_str() == ".cache")
+    }
+
+    /// An [`SceneError::Asset`] about `asset` at `span`.
+    fn asset(
+        &self,
+        span: Range<usize>,
+        field: &str,
+        asset: PathBuf,
+        problem: String,
+        missing: bool,
+    ) -> SceneError {
+        let (step, on_demand) = self.assets.clone().map_or((None, false), |(s, d)| (Some(s), d));
+        SceneError::Asset {
+            path: self.path.to_path_buf(),
+            line: self.line_col(span.start).0,
+            field: field.to_string(),
+            asset,
+            problem,
+            step,
+            on_demand,
+            missing,
+        }
+    }
+
+    /// The error for file `file` (as the scene file gives it) that failed to load with `e`:
+    /// an asset error with the way to fetch it when the set-up fetches it (`missing`: a file
+    /// it refers to, e.g. a glTF's buffer, is not there), else [`Source::at`].
+    fn file_err(
+        &self,
+        span: Range<usize>,
+        field: &str,
+        file: &str,
+        e: impl std::fmt::Display,
+        missing: Option<PathBuf>,
+    ) -> SceneError {
+        let path = self.resolve(file);
+        if !Self::is_fetched(&path) {
+            return self.at(span, field, e);
+        }
+        match missing {
+            Some(inner) => self.asset(span, field, inner, "is missing".to_string(), true),
+            None => self.asset(span, field, path, format!("cannot be read: {e}"), false),
+        }
+    }
+
+    /// Every fetched file the scene names must be there: the first that is not is an
+    /// [`SceneError::Asset`] (before anything is loaded, so the message is about fetching).
+    fn check_assets(&self, spec: &SceneSpec) -> Result<(), SceneError> {
+        let mut files: Vec<(Range<usize>, String, &str)> = Vec::new();
+        for (k, o) in spec.objects.iter().enumerate() {
+            if let Some(m) = &o.get_ref().mesh {
+                files.push((m.span(), format!("objects[{k}].mesh"), m.get_ref()));
+            }
+        }
+        for (name, m) in &spec.materials {
+            match m.get_ref() {
+                MaterialSpec::Textured { texture, .. } => {
+                    files.push((m.span(), format!("materials.{name}.texture"), texture));
+                }
+                MaterialSpec::Bdf { file, texture } => {
+                    files.push((m.span(), format!("materials.{name}.file"), file));
+                    if let Some(t) = texture {
+                        files.push((m.span(), format!("materials.{name}.texture"), t));
+                    }
+                }
+                _ => {}
+            }
+        }
+        for (k, l) in spec.lights.iter().enumerate() {
+            if let LightSpec::Goniodiagram { file, .. } | LightSpec::Environment { file, .. } =
+                l.get_ref()
+            {
+                files.push((l.span(), format!("lights[{k}].file"), file));
+            }
+        }
+        for (span, field, file) in files {
+            let path = self.resolve(file);
+            if Self::is_fetched(&path) && !path.exists() {
+                return Err(self.asset(span, &field, path, "is missing".to_string(), true));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The file a glTF load found missing (a buffer or image beside it, or itself).
+fn missing_file(e: &SceneError) -> Option<PathBuf> {
+    match e {
+        SceneError::Io { path, source } if source.kind() == std::io::ErrorKind::NotFound => {
+            Some(path.clone())
+        }
+        _ => None,
+    }
 }
 
 /// Reads and checks a scene file.
@@ -324,6 +442,7 @@ pub fn parse(path: &Path, text: &str) -> Result<RenderScene, SceneError> {
         path,
         text,
         dir: path.parent().unwrap_or(Path::new(".")).to_path_buf(),
+        assets: None,
     };
     let spec: SceneSpec = toml::from_str(text).map_err(|e| {
         let (line, column) = e.span().map_or((0, 0), |s| src.line_col(s.start));
@@ -334,6 +453,11 @@ pub fn parse(path: &Path, text: &str) -> Result<RenderScene, SceneError> {
             problem: e.message().trim().to_string(),
         }
     })?;
+    let src = Source {
+        assets: spec.assets.as_ref().map(|a| (a.fetch.clone(), a.on_demand)),
+        ..src
+    };
+    src.check_assets(&spec)?;
     build(&src, spec)
 }
 
@@ -447,8 +571,10 @@ fn build(src: &Source, spec: SceneSpec) -> Result<RenderScene, SceneError> {
                      by placing them as separate objects)",
                 ));
             }
-            let l = super::gltf::read_file(&src.resolve(m.get_ref()))
-                .map_err(|e| src.at(m.span(), &format!("{field}.mesh"), e))?;
+            let l = super::gltf::read_file(&src.resolve(m.get_ref())).map_err(|e| {
+                let missing = missing_file(&e);
+                src.file_err(m.span(), &format!("{field}.mesh"), m.get_ref(), e, missing)
+            })?;
             let (mesh_base, mat_base) = (meshes.len(), materials.len() as u32);
             for mut sm in l.meshes {
                 match mat {
@@ -482,8 +608,9 @@ fn build(src: &Source, spec: SceneSpec) -> Result<RenderScene, SceneError> {
                 let shaded = match (&o.mesh, &o.shape) {
                     (Some(m), _) => {
                         let path = src.resolve(m.get_ref());
-                        let file = crate::mesh_file::load_shaded(&path)
-                            .map_err(|e| src.at(m.span(), &format!("{field}.mesh"), e))?;
+                        let file = crate::mesh_file::load_shaded(&path).map_err(|e| {
+                            src.file_err(m.span(), &format!("{field}.mesh"), m.get_ref(), e, None)
+                        })?;
                         let mut shaded = file.mesh;
                         match mat {
                             Some(id) => shaded.material.iter_mut().for_each(|x| *x = id),
@@ -558,7 +685,12 @@ fn build(src: &Source, spec: SceneSpec) -> Result<RenderScene, SceneError> {
     let mut lights = gltf_lights;
     for (k, l) in spec.lights.iter().enumerate() {
         let light = make_light(src, l.get_ref(), k as u64)
-            .map_err(|e| src.at(l.span(), &format!("lights[{k}]"), e))?;
+            .map_err(|e| match l.get_ref() {
+                LightSpec::Goniodiagram { file, .. } | LightSpec::Environment { file, .. } => {
+                    src.file_err(l.span(), &format!("lights[{k}].file"), file, e, None)
+                }
+                _ => src.at(l.span(), &format!("lights[{k}]"), e),
+            })?;
         lights.push(light);
     }
 
@@ -631,7 +763,7 @@ fn material(src: &Source, name: &str, m: &Spanned<MaterialSpec>) -> Result<Mater
         let p = src.resolve(file);
         crate::texture::load(&p, wrap, &InverseToneMap::default())
             .map(Arc::new)
-            .map_err(|e| src.at(m.span(), &format!("{field}.texture"), e))
+            .map_err(|e| src.file_err(m.span(), &format!("{field}.texture"), file, e, None))
     };
     Ok(match m.get_ref() {
         MaterialSpec::Phong {
@@ -681,7 +813,7 @@ fn material(src: &Source, name: &str, m: &Spanned<MaterialSpec>) -> Result<Mater
         MaterialSpec::Bdf { file, texture: tex } => {
             let p = src.resolve(file);
             let bdf = crate::bdf::format::read(&p)
-                .map_err(|e| src.at(m.span(), &format!("{field}.file"), e))?;
+                .map_err(|e| src.file_err(m.span(), &format!("{field}.file"), file, e, None))?;
             let mut out = Material::phong(name, [0.0; 3], [0.0; 3], 0.0);
             out.bdf = Some(Arc::new(bdf));
             if let Some(t) = tex {
