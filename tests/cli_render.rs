@@ -67,7 +67,20 @@ fn bad_input_fails_with_a_message() {
     let png = dir.path().join("x.png");
     let png = png.to_str().unwrap();
     let missing = dir.path().join("missing.toml");
-    let cases: [(Vec<&str>, &str); 5] = [
+    // A scene whose fetched asset is not there: named, with the command that fetches it.
+    let unfetched = dir.path().join("unfetched.toml");
+    std::fs::write(
+        &unfetched,
+        "[assets]\nfetch = \"assimp\"\n[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\n\
+         [[objects]]\nmesh = \".cache/scenes/assimp/nothing.glb\"\n\
+         [[lights]]\ntype = \"omni\"\nposition = [0, 3, 0]\nintensity = [1, 1, 1]\n",
+    )
+    .unwrap();
+    let cases: [(Vec<&str>, &str); 6] = [
+        (
+            vec!["render", unfetched.to_str().unwrap(), "--out", png],
+            "nothing.glb is missing; it is not fetched: run `python3 scripts/native.py assimp`",
+        ),
         (
             vec!["render", missing.to_str().unwrap(), "--out", png],
             "missing.toml",

@@ -89,7 +89,9 @@ fn fetch_hint(step: Option<&str>, on_demand: bool, missing: bool) -> String {
         None => "python3 scripts/native.py".to_string(),
     };
     let mut out = if missing {
-        format!("it is not fetched: run `{cmd}` (the project's set-up fetches it, pinned and checked)")
+        format!(
+            "it is not fetched: run `{cmd}` (the project's set-up fetches it, pinned and checked)"
+        )
     } else {
         format!(
             "it is fetched by the project's set-up: run `{cmd}` to fetch it again (every file \
@@ -115,7 +117,13 @@ impl SceneError {
     /// Whether the asset at fault is fetched only when asked for by name (see
     /// [`SceneError::Asset`]).
     pub fn is_on_demand_asset(&self) -> bool {
-        matches!(self, SceneError::Asset { on_demand: true, .. })
+        matches!(
+            self,
+            SceneError::Asset {
+                on_demand: true,
+                ..
+            }
+        )
     }
 }
 

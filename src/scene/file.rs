@@ -343,7 +343,10 @@ impl Source<'_> {
         problem: String,
         missing: bool,
     ) -> SceneError {
-        let (step, on_demand) = self.assets.clone().map_or((None, false), |(s, d)| (Some(s), d));
+        let (step, on_demand) = self
+            .assets
+            .clone()
+            .map_or((None, false), |(s, d)| (Some(s), d));
         SceneError::Asset {
             path: self.path.to_path_buf(),
             line: self.line_col(span.start).0,
@@ -684,13 +687,12 @@ fn build(src: &Source, spec: SceneSpec) -> Result<RenderScene, SceneError> {
 
     let mut lights = gltf_lights;
     for (k, l) in spec.lights.iter().enumerate() {
-        let light = make_light(src, l.get_ref(), k as u64)
-            .map_err(|e| match l.get_ref() {
-                LightSpec::Goniodiagram { file, .. } | LightSpec::Environment { file, .. } => {
-                    src.file_err(l.span(), &format!("lights[{k}].file"), file, e, None)
-                }
-                _ => src.at(l.span(), &format!("lights[{k}]"), e),
-            })?;
+        let light = make_light(src, l.get_ref(), k as u64).map_err(|e| match l.get_ref() {
+            LightSpec::Goniodiagram { file, .. } | LightSpec::Environment { file, .. } => {
+                src.file_err(l.span(), &format!("lights[{k}].file"), file, e, None)
+            }
+            _ => src.at(l.span(), &format!("lights[{k}]"), e),
+        })?;
         lights.push(light);
     }
 

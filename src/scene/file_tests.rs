@@ -247,3 +247,106 @@ fn a_goniodiagram_from_an_ies_file() {
     let s = super::load(p.to_str().unwrap()).unwrap();
     assert_eq!(s.lights[0].kind(), crate::light::LightKind::Goniodiagram);
 }
+
+/// A scene file in a temporary folder whose object is `mesh` and whose environment light is
+/// `env` (paths as the file gives them), with an `[assets]` table.
+fn asset_scene(dir: &Path, mesh: &str, env: &str) -> PathBuf {
+    let p = dir.join("assets.toml");
+    std::fs::write(
+        &p,
+        format!(
+            "[assets]\nfetch = \"assimp hdr\"\n\n[camera]\nposition = [0, 0, 3]\n\
+             look_at = [0, 0, 0]\n\n[[objects]]\nmesh = \"{mesh}\"\n\n[[lights]]\n\
+             type = \"environment\"\nfile = \"{env}\"\n"
+        ),
+    )
+    .unwrap();
+    p
+}
+
+#[test]
+fn a_missing_or_corrupt_asset_names_it_and_how_to_fetch_it() {
+    let d = tempfile::tempdir().unwrap();
+    let cache = d.path().join(".cache/scenes");
+    std::fs::create_dir_all(&cache).unwrap();
+    let load = |p: &Path| super::load(p.to_str().unwrap()).unwrap_err();
+
+    // Not fetched: the mesh, with its field and line, and the command.
+    let p = asset_scene(
+        d.path(),
+        ".cache/scenes/engine.glb",
+        ".cache/hdr/studio.exr",
+    );
+    let e = load(&p);
+    let msg = e.to_string();
+    assert!(e.is_missing_asset() && !e.is_on_demand_asset(), "{msg}");
+    assert!(
+        msg.contains("assets.toml:9:")
+            && msg.contains("objects[0].mesh")
+            && msg.contains("engine.glb is missing")
+            && msg.contains("run `python3 scripts/native.py assimp hdr`"),
+        "{msg}"
+    );
+
+    // A glTF there whose buffer is not: the buffer is named as the missing asset.
+    let gltf = super::gltf::tests::quad_gltf();
+    let start = gltf.find("data:application").unwrap();
+    let end = start + gltf[start..].find('"').unwrap();
+    let gltf = gltf.replace(&gltf[start..end], "quad.bin");
+    std::fs::write(cache.join("quad.gltf"), gltf).unwrap();
+    let p = asset_scene(d.path(), ".cache/scenes/quad.gltf", ".cache/hdr/studio.exr");
+    let e = load(&p);
+    let msg = e.to_string();
+    assert!(
+        e.is_missing_asset() && msg.contains("quad.bin is missing"),
+        "{msg}"
+    );
+
+    // Present but corrupt: cannot be read, fetch again.
+    std::fs::write(cache.join("broken.glb"), b"glTF\x02\0\0\0garbage").unwrap();
+    let p = asset_scene(
+        d.path(),
+        ".cache/scenes/broken.glb",
+        ".cache/hdr/studio.exr",
+    );
+    let e = load(&p);
+    let msg = e.to_string();
+    assert!(!e.is_missing_asset(), "{msg}");
+    assert!(
+        msg.contains("broken.glb cannot be read")
+            && msg.contains("`python3 scripts/native.py assimp hdr` to fetch it again"),
+        "{msg}"
+    );
+
+    // The environment map: named with its light.
+    std::fs::write(
+        cache.join("tri.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    let p = asset_scene(d.path(), ".cache/scenes/tri.obj", ".cache/hdr/none.exr");
+    let e = load(&p);
+    let msg = e.to_string();
+    assert!(
+        e.is_missing_asset() && msg.contains("lights[0].file") && msg.contains("none.exr"),
+        "{msg}"
+    );
+
+    // On-demand assets say so.
+    let text = std::fs::read_to_string(&p).unwrap().replace(
+        "fetch = \"assimp hdr\"",
+        "fetch = \"dungeon\"\non_demand = true",
+    );
+    std::fs::write(&p, text).unwrap();
+    let e = load(&p);
+    assert!(e.is_on_demand_asset(), "{e}");
+    assert!(e.to_string().contains("without --quick"), "{e}");
+
+    // A missing file outside `.cache` keeps the plain error.
+    let p = asset_scene(d.path(), "elsewhere.obj", "sky.exr");
+    let e = load(&p);
+    assert!(
+        !e.is_missing_asset() && e.to_string().contains("elsewhere.obj"),
+        "{e}"
+    );
+}
