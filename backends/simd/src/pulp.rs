@@ -196,11 +196,9 @@ impl<S: Simd> Lanes for PulpLanes<S> {
     }
     #[inline(always)]
     fn splat_mask(self, b: bool) -> PM32<S> {
+        // A compare, not a transmute: pulp's V4 masks are bit masks (`b16`), not lanes.
         let s = self.0;
-        PM32(
-            s.transmute_m32s_u32s(s.splat_u32s(if b { !0 } else { 0 })),
-            s,
-        )
+        PM32(s.equal_u32s(s.splat_u32s(0), s.splat_u32s(!b as u32)), s)
     }
     #[inline(always)]
     fn lane_ids(self) -> PI32<S> {
