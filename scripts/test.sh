@@ -14,5 +14,9 @@ export COHERENT_REQUIRE_HDR=1
 # And the real scenes' assets (every scenes/*.toml but the dungeon, which only the full
 # reproduce fetches: a 257 MB download).
 export COHERENT_REQUIRE_SCENES=1
-cargo test --workspace "$@"
-cargo test --workspace --no-default-features "$@"
+# A backend this CPU has must run, not be skipped: the list is computed here from the CPU's
+# flags (machines differ: some have AVX-512, some only AVX2), independently of the crate's own
+# detection. COHERENT_REQUIRE_BACKENDS set by the caller wins.
+required=$(scripts/required-backends.sh)
+COHERENT_REQUIRE_BACKENDS="${COHERENT_REQUIRE_BACKENDS:-$required}" cargo test --workspace "$@"
+COHERENT_REQUIRE_BACKENDS=scalar cargo test --workspace --no-default-features "$@"

@@ -107,6 +107,10 @@ pub struct Machine {
     /// The lane backends compiled in and usable on this CPU (`Backend::available`).
     #[serde(default)]
     pub backends: Vec<String>,
+    /// The lane backends this build or CPU cannot run, as `name: reason`
+    /// (`Backend::skipped`): experiments and tests skip them.
+    #[serde(default)]
+    pub skipped_backends: Vec<String>,
 }
 
 impl Machine {
@@ -129,6 +133,10 @@ impl Machine {
             backends: Backend::available()
                 .iter()
                 .map(|b| b.name().to_owned())
+                .collect(),
+            skipped_backends: Backend::skipped()
+                .into_iter()
+                .map(|(b, why)| format!("{b}: {why}"))
                 .collect(),
         }
     }

@@ -65,8 +65,8 @@ fn main() -> ExitCode {
 struct RenderArgs {
     /// A scene file (.toml), a built-in scene's name, or a bare mesh file.
     scene: String,
-    /// Lane backend: scalar, sse, wide4, wide8, wide16, pulp8, pulp16 (default: the widest
-    /// usable here).
+    /// Lane backend: scalar, sse, wide4, wide8, wide16, avx2, avx512 (hand-written), pulp8,
+    /// pulp16 (pulp's portable operations) (default: the widest hand-written one usable here).
     #[arg(long)]
     backend: Option<String>,
     /// Accelerator: bsp, embree, obvhs, brute.
@@ -172,11 +172,25 @@ fn info(json: bool) -> anyhow::Result<()> {
         };
         writeln!(out, "  {:<7} {lanes:<9} {state}", backend.name())?;
     }
+    let skipped: Vec<String> = Backend::skipped()
+        .into_iter()
+        .map(|(b, _)| b.name().to_owned())
+        .collect();
+    writeln!(
+        out,
+        "  skipped here: {}",
+        if skipped.is_empty() {
+            "(none)".to_owned()
+        } else {
+            skipped.join(", ")
+        }
+    )?;
     writeln!(
         out,
         "  wide4/8/16 use the build's target features (above): build with\n  \
          RUSTFLAGS=\"-C target-cpu=native\" to let them use this CPU's AVX/AVX-512;\n  \
-         pulp8/16 choose AVX2/AVX-512 at run time."
+         avx2/avx512 (hand-written intrinsics) and pulp8/16 (pulp's portable\n  \
+         operations) choose AVX2/AVX-512 at run time."
     )?;
     writeln!(out, "accelerators:")?;
     writeln!(

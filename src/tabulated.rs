@@ -20,7 +20,7 @@
 //! first node (indices always stay inside the table, so inactive lanes need no care).
 
 // Index loops, not iterator adapters, in the per-packet code: it must inline into the
-// backends' `#[target_feature]` entry points (a non-inlined `array::from_fn` made pulp8 7x slower).
+// backends' `#[target_feature]` entry points (a non-inlined `array::from_fn` made the AVX2 backend 7x slower).
 #![allow(clippy::needless_range_loop)]
 
 use coherent_simd::{Lanes, SimdF32, SimdI32, SimdMask};

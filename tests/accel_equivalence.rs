@@ -458,8 +458,8 @@ macro_rules! accel_backends {
             accel_tests!(wide4, $which, Backend::Wide4);
             accel_tests!(wide8, $which, Backend::Wide8);
             accel_tests!(wide16, $which, Backend::Wide16);
-            accel_tests!(pulp8, $which, Backend::Pulp8);
-            accel_tests!(pulp16, $which, Backend::Pulp16);
+            accel_tests!(avx2, $which, Backend::Avx2);
+            accel_tests!(avx512, $which, Backend::Avx512);
         }
     };
 }

@@ -9,7 +9,7 @@
 //!
 //! Protocol: width 1 is the single-ray traversal (`Accel::intersect1`/`occluded1`), the
 //! scalar baseline; widths 4, 8, 16 run the packet traversal on one backend each: the
-//! hand-written or run-time dispatched one (sse, pulp8, pulp16), else the `wide` one. Primary
+//! hand-written or run-time dispatched one (sse, avx2, avx512), else the `wide` one. Primary
 //! rays go through the pixel centres, ordered in screen tiles of the packet's shape (4x4 tiles
 //! for width 1); shadow rays go from the primary hits to the scene's point light (any-hit);
 //! diffuse rays from the primary hits over the cosine hemisphere, seeded per pixel, so every
@@ -849,7 +849,7 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     let mut md = String::new();
     md.push_str(
         "Mrays/s of the two-level BSP, one thread, and in brackets the speedup over width 1 \
-         (single-ray traversal) in the same run. Widths 4/8/16 use the sse/pulp8/pulp16 \
+         (single-ray traversal) in the same run. Widths 4/8/16 use the sse/avx2/avx512 \
          backends where usable (else wide). The packet goals on primary rays: width 4 >= \
          2.5x, width 16 >= 5x. Every width traces the same rays (ordered in tiles of its \
          packet's shape).\n\n",

@@ -12,6 +12,8 @@
 
 use std::collections::BTreeMap;
 
+use coherent::bdf::workload::{BdfCalls, BdfInputs};
+use coherent::bdf::{Analytic, PAPER_ANISOTROPIC_SHAPE, Symmetry, tabulate_anisotropic};
 use coherent::kernels::{ApproxKernel, approx_inputs};
 use coherent::simd::Backend;
 use coherent::simd::approx::{Approx, Bound, EvalSlices};
@@ -33,7 +35,17 @@ pub const EXPERIMENT: Experiment = Experiment {
     description: "the approximations (exp, log, pow, acos, atan2) per lane backend",
     paper: "sections 4.2, 5 and 6.1 (the SSE approximations)",
     csv: &["kernels.csv", "kernels_accuracy.csv", "texture_lod.csv"],
-    plots: &["kernels_speedup_vs_lanes", "kernels_speedup"],
+    plots: &[
+        "kernels_speedup_vs_lanes",
+        "kernels_speedup",
+        "portability_exp",
+        "portability_log",
+        "portability_pow",
+        "portability_acos",
+        "portability_atan2",
+        "portability_texture_trilinear",
+        "portability_bdf_anisotropic",
+    ],
     status: Status::Ready { run, report },
 };
 
@@ -112,6 +124,35 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
         }
     }
     texture_lod(ctx, &texture, &tex_inputs)?;
+
+    // The tabulated anisotropic BDF (section 4.2, Table 1's workload): calls from a brushed
+    // sphere, here so that the portability table has every kernel in one run.
+    let bdf = tabulate_anisotropic(
+        &Analytic::brushed_ward(),
+        PAPER_ANISOTROPIC_SHAPE,
+        Symmetry::Quadrant,
+    )?;
+    let bdf_inputs = BdfInputs::sphere(ctx.pick(256, 512));
+    let bdf_calls = passes * VALUES / 4;
+    let mut bdf_seconds: BTreeMap<Backend, Vec<f64>> = BTreeMap::new();
+    let bdf_sample = |backend: Backend| -> anyhow::Result<f64> {
+        let start = std::time::Instant::now();
+        std::hint::black_box(backend.run(BdfCalls {
+            bdf: &bdf,
+            inputs: &bdf_inputs,
+            calls: bdf_calls,
+        })?);
+        Ok(start.elapsed().as_secs_f64())
+    };
+    for &backend in &backends {
+        bdf_sample(backend)?; // warm-up
+    }
+    for _ in 0..samples {
+        for &backend in &backends {
+            let s = bdf_sample(backend)?;
+            bdf_seconds.entry(backend).or_default().push(s);
+        }
+    }
 
     // Tone mapping (section 6.1): each operator over a 16,384-pixel HDR image, with its
     // adaptation from a 1-in-16 subsample (the pre-render).
@@ -193,6 +234,20 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
             ])?;
         }
     }
+    {
+        let bdf_scale = PER / bdf_calls as f64;
+        let scalar = median(&bdf_seconds[&Backend::Scalar]) * bdf_scale;
+        for &backend in &backends {
+            let s = median(&bdf_seconds[&backend]) * bdf_scale;
+            csv.row(&[
+                &BDF_KERNEL,
+                &backend.name(),
+                &backend.lanes(),
+                &format!("{s:.6e}"),
+                &format!("{:.3}", speedup(scalar, s)),
+            ])?;
+        }
+    }
     for op in Operator::ALL {
         let scalar = median(&tm_seconds[&(op, Backend::Scalar)]) * scale;
         for &backend in &backends {
@@ -252,6 +307,162 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
 
     plots(ctx)?;
     Ok(())
+}
+
+/// The BDF kernel's name in `kernels.csv`: Table 1's tabulated anisotropic BDF calls.
+const BDF_KERNEL: &str = "bdf_anisotropic";
+
+/// The kernels of the portability table and plots (`portability_<kernel>`).
+const PORTABILITY_KERNELS: [&str; 7] = [
+    "exp",
+    "log",
+    "pow",
+    "acos",
+    "atan2",
+    "texture_trilinear",
+    BDF_KERNEL,
+];
+
+/// Per width: the hand-written, the pulp (portable) and the `wide` backend.
+const FAMILIES: [(usize, Option<&str>, Option<&str>, &str); 3] = [
+    (4, Some("sse"), None, "wide4"),
+    (8, Some("avx2"), Some("pulp8"), "wide8"),
+    (16, Some("avx512"), Some("pulp16"), "wide16"),
+];
+
+/// The portability target: pulp's time at most this times the hand-written one's.
+const PORTABILITY_TARGET: f64 = 1.15;
+
+/// Seconds of `(kernel, backend)` in a `kernels.csv` table.
+fn seconds_of(t: &crate::Table, kernel: &str, backend: &str) -> anyhow::Result<Option<f64>> {
+    for r in t.rows_where("kernel", kernel)? {
+        if t.get(r, "backend")? == backend {
+            return Ok(Some(t.f64(r, "seconds")?));
+        }
+    }
+    Ok(None)
+}
+
+/// One bar chart per kernel: speedup over scalar of hand-written, pulp and wide at 4, 8 and
+/// 16 lanes, the native build's beside it where `native/kernels.csv` exists.
+fn portability_plots(ctx: &Ctx, t: &crate::Table) -> anyhow::Result<()> {
+    let native = ctx.read_csv("native/kernels.csv", HEADER).ok().flatten();
+    for kernel in PORTABILITY_KERNELS {
+        let mut series = Vec::new();
+        let builds: Vec<(&str, &crate::Table)> = std::iter::once(("", t))
+            .chain(native.as_ref().map(|n| (" (native)", n)))
+            .collect();
+        for (suffix, table) in builds {
+            let Some(scalar) = seconds_of(table, kernel, "scalar")? else {
+                continue;
+            };
+            for (family, pick) in [("hand-written", 0), ("pulp", 1), ("wide", 2)] {
+                let mut v = Vec::new();
+                for &(_, hand, pulp, wide) in &FAMILIES {
+                    let b = [hand, pulp, Some(wide)][pick];
+                    let s = match b {
+                        Some(b) => seconds_of(table, kernel, b)?,
+                        None => None,
+                    };
+                    v.push(s.map_or(f64::NAN, |s| speedup(scalar, s)));
+                }
+                series.push((format!("{family}{suffix}"), v));
+            }
+        }
+        if series.is_empty() {
+            continue;
+        }
+        ctx.bar_chart(
+            &format!("portability_{kernel}"),
+            &BarChart {
+                title: format!(
+                    "{kernel}: hand-written (sse/avx2/avx512) vs pulp vs wide, speedup over scalar"
+                ),
+                y_label: "speedup over scalar".into(),
+                categories: FAMILIES.iter().map(|f| format!("{} lanes", f.0)).collect(),
+                series,
+            },
+        )?;
+    }
+    Ok(())
+}
+
+/// The portability table: per kernel and width, the speedups and pulp's and wide's time
+/// over the hand-written backend's (in one build; the native build's columns where present).
+fn portability_report(ctx: &Ctx, t: &crate::Table) -> anyhow::Result<String> {
+    let native = ctx.read_csv("native/kernels.csv", HEADER).ok().flatten();
+    let mut md = format!(
+        "
+**The cost of portability.** Per kernel and width, the speedup over scalar of the          hand-written backend (sse, avx2, avx512: `core::arch` intrinsics), the pulp backend          (pulp8, pulp16: one implementation on pulp's portable operations) and `wide`, and          the time of pulp and of wide relative to the hand-written backend at the same width          (1.00 = as fast; target for pulp: <= {PORTABILITY_TARGET:.2}). `wide` uses only the          build's target features (SSE2 in the default build). Plots: `plots/portability_<kernel>`.
+
+"
+    );
+    let builds: Vec<(&str, &crate::Table)> = std::iter::once(("default", t))
+        .chain(native.as_ref().map(|n| ("native", n)))
+        .collect();
+    let mut rows = Vec::new();
+    for kernel in PORTABILITY_KERNELS {
+        for &(lanes, hand, pulp, wide) in &FAMILIES {
+            for &(build, table) in &builds {
+                let Some(scalar) = seconds_of(table, kernel, "scalar")? else {
+                    continue;
+                };
+                let sec = |b: Option<&str>| -> anyhow::Result<Option<f64>> {
+                    match b {
+                        Some(b) => seconds_of(table, kernel, b),
+                        None => Ok(None),
+                    }
+                };
+                let (h, p, w) = (sec(hand)?, sec(pulp)?, sec(Some(wide))?);
+                if h.is_none() && p.is_none() && w.is_none() {
+                    continue;
+                }
+                let sp = |s: Option<f64>| {
+                    s.map_or("—".to_owned(), |s| format!("{:.2}x", speedup(scalar, s)))
+                };
+                let ratio = |s: Option<f64>| match (s, h) {
+                    (Some(s), Some(h)) => format!("{:.2}", s / h),
+                    _ => "—".to_owned(),
+                };
+                let verdict = match (p, h) {
+                    (Some(p), Some(h)) if p / h <= PORTABILITY_TARGET => "met",
+                    (Some(_), Some(_)) => "not met",
+                    _ => "—",
+                };
+                rows.push(vec![
+                    kernel.to_owned(),
+                    lanes.to_string(),
+                    build.to_owned(),
+                    format!("{} {}", hand.unwrap_or("—"), sp(h)),
+                    format!("{} {}", pulp.unwrap_or("—"), sp(p)),
+                    format!("{wide} {}", sp(w)),
+                    ratio(p),
+                    verdict.to_owned(),
+                    ratio(w),
+                ]);
+            }
+        }
+    }
+    md.push_str(&markdown_table(
+        &[
+            "kernel",
+            "lanes",
+            "build",
+            "hand-written",
+            "pulp",
+            "wide",
+            "pulp / hand-written time",
+            "pulp target",
+            "wide / hand-written time",
+        ],
+        &rows,
+    ));
+    for kernel in PORTABILITY_KERNELS {
+        if let Some(p) = ctx.plot_markdown(&format!("portability_{kernel}"), kernel) {
+            md.push_str(&p);
+        }
+    }
+    Ok(md)
 }
 
 /// The texture kernels: the mip level by the paper's halving, and from ray differentials.
@@ -340,7 +551,7 @@ fn max_error(f: Approx, a: &[f32], b: &[f32], got: &[f32]) -> (f64, f64, &'stati
 
 /// The backends of the speedup-vs-lanes plot: the hand-written or run-time dispatched one at
 /// each width (the bar chart shows every backend, `wide` included).
-const NATIVE: &[&str] = &["scalar", "sse", "pulp8", "pulp16"];
+const NATIVE: &[&str] = &["scalar", "sse", "avx2", "avx512"];
 
 fn plots(ctx: &Ctx) -> anyhow::Result<()> {
     let Some(t) = ctx.read_csv("kernels.csv", HEADER)? else {
@@ -366,7 +577,7 @@ fn plots(ctx: &Ctx) -> anyhow::Result<()> {
     ctx.line_chart(
         "kernels_speedup_vs_lanes",
         &LineChart {
-            title: "Approximation kernels: speedup vs lanes (scalar, sse, pulp8, pulp16)".into(),
+            title: "Approximation kernels: speedup vs lanes (scalar, sse, avx2, avx512)".into(),
             x_label: "lanes".into(),
             y_label: "speedup over scalar".into(),
             series,
@@ -400,6 +611,7 @@ fn plots(ctx: &Ctx) -> anyhow::Result<()> {
             series: bars,
         },
     )?;
+    portability_plots(ctx, &t)?;
     Ok(())
 }
 
@@ -457,6 +669,7 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     if let Some(p) = ctx.plot_markdown("kernels_speedup", "speedup per backend") {
         md.push_str(&p);
     }
+    md.push_str(&portability_report(ctx, &t)?);
     if let Some(acc) = ctx.read_csv("kernels_accuracy.csv", ACCURACY_HEADER)? {
         md.push_str(
             "\nAccuracy against `std` (f64) over a dense sweep of each domain, per backend \

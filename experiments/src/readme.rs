@@ -139,6 +139,15 @@ fn machine_section(ctx: &Ctx, problems: &mut Vec<String>) -> String {
             },
         ],
         vec!["profile".to_owned(), m.profile.clone()],
+        vec!["backends (usable)".to_owned(), list(&m.backends)],
+        vec![
+            "backends skipped".to_owned(),
+            if m.skipped_backends.is_empty() {
+                "(none)".to_owned()
+            } else {
+                m.skipped_backends.join("; ")
+            },
+        ],
         vec!["git_rev".to_owned(), m.git_rev.clone()],
         vec!["date".to_owned(), m.date.clone()],
         vec!["os".to_owned(), m.os.clone()],

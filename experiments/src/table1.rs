@@ -71,7 +71,7 @@ const PAPER: PaperTable = PaperTable {
 
 /// The backends of the speedup-vs-lanes plot: the hand-written or run-time dispatched one
 /// at each width (the bar chart shows every backend, `wide` included).
-const NATIVE: &[&str] = &["scalar", "sse", "pulp8", "pulp16"];
+const NATIVE: &[&str] = &["scalar", "sse", "avx2", "avx512"];
 
 /// The project's targets for the speedup over scalar: `(lanes, target)`.
 const TARGETS: &[(usize, f64)] = &[(4, 3.2), (8, 6.0), (16, 10.0)];
@@ -291,7 +291,7 @@ fn plots(ctx: &Ctx) -> anyhow::Result<()> {
     ctx.line_chart(
         "table1_speedup_vs_lanes",
         &LineChart {
-            title: "Table 1: BDF evaluation speedup vs lanes (scalar, sse, pulp8, pulp16)".into(),
+            title: "Table 1: BDF evaluation speedup vs lanes (scalar, sse, avx2, avx512)".into(),
             x_label: "lanes".into(),
             y_label: "speedup over scalar".into(),
             series,

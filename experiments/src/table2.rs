@@ -84,7 +84,7 @@ const PAPER: PaperTable = PaperTable {
 const TARGETS: &[(usize, f64)] = &[(4, 3.5), (8, 6.0), (16, 10.0)];
 
 /// The backends of the speedup-vs-lanes plot.
-const NATIVE: &[&str] = &["scalar", "sse", "pulp8", "pulp16"];
+const NATIVE: &[&str] = &["scalar", "sse", "avx2", "avx512"];
 
 /// Height of the lights above the ground.
 const H: f32 = 3.0;
@@ -548,7 +548,7 @@ fn plots(ctx: &Ctx) -> anyhow::Result<()> {
     ctx.line_chart(
         "table2_speedup_vs_lanes",
         &LineChart {
-            title: "Table 2: lighting speedup vs lanes (scalar, sse, pulp8, pulp16; no shadows)"
+            title: "Table 2: lighting speedup vs lanes (scalar, sse, avx2, avx512; no shadows)"
                 .into(),
             x_label: "lanes".into(),
             y_label: "speedup over scalar".into(),

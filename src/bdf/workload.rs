@@ -4,6 +4,8 @@
 //! or 16 consecutive calls is a coherent group of neighbouring pixels, as the renderer's
 //! packets are; only tiles whose 16 pixels all hit the sphere are kept.
 
+use std::hint::black_box;
+
 use coherent_simd::{Kernel, Lanes, Rgbs, SimdF32, Vec3s};
 use glam::Vec3;
 
@@ -106,6 +108,9 @@ impl Kernel for BdfCalls<'_> {
         let mut done = 0;
         let mut i = 0;
         while done < self.calls {
+            // Each packet's inputs through `black_box`, on every backend alike (as the
+            // approximation kernels do): the scalar loop stays one call at a time.
+            let v = black_box(v);
             let frames = Frames {
                 tangent: load3(l, &v[0], i),
                 bitangent: load3(l, &v[1], i),

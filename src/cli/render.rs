@@ -26,10 +26,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             }
             b
         }
-        None => *Backend::available()
-            .iter()
-            .max_by_key(|b| b.lanes())
-            .unwrap_or(&Backend::Scalar),
+        None => Backend::widest(),
     };
     let kind: AccelKind = args.accel.parse()?;
     match args.out.extension().and_then(|e| e.to_str()) {

@@ -35,9 +35,7 @@ impl<S> Rendered<S> {
     /// Writes the tone-mapped image, sRGB encoded, to a PNG file (tone mapping runs on the
     /// widest backend usable here).
     pub fn write_png(&self, path: &Path) -> Result<(), FilmError> {
-        let backend = *Backend::available()
-            .last()
-            .expect("scalar is always usable");
+        let backend = Backend::widest();
         write_png_rgb(
             path,
             self.film.width,

@@ -7,7 +7,7 @@
 //! falls between texels `floor(s w - 1/2)` and the next one.
 
 // Index loops, not iterator adapters, in the per-packet code: it must inline into the
-// backends' `#[target_feature]` entry points (a non-inlined `array::from_fn` made pulp8 7x slower).
+// backends' `#[target_feature]` entry points (a non-inlined `array::from_fn` made the AVX2 backend 7x slower).
 #![allow(clippy::needless_range_loop)]
 
 use coherent_simd::{Lanes, Rgbs, SimdF32, SimdMask};

@@ -4,6 +4,8 @@
 //! has its texture coordinates and hit distance, and the kernel chooses the mip level by
 //! successive halving and filters trilinearly.
 
+use std::hint::black_box;
+
 use coherent_simd::{Kernel, Lanes, Rgbs, SimdF32};
 
 use super::lod::{lod_by_halving, lod_from_differentials};
@@ -164,9 +166,12 @@ impl Kernel for TextureLookups<'_> {
         let mut sum = Rgbs::zero(l);
         let (mut done, mut i) = (0, 0);
         while done < self.lookups {
-            let s = l.load(&self.inputs.s[i..]);
-            let t = l.load(&self.inputs.t[i..]);
-            let lod = lod_at(l, self.texture, self.inputs, self.lod, i);
+            // Each packet's inputs through `black_box`, on every backend alike (as the
+            // approximation kernels do): the scalar loop stays one lookup at a time.
+            let inputs = black_box(self.inputs);
+            let s = l.load(&inputs.s[i..]);
+            let t = l.load(&inputs.t[i..]);
+            let lod = lod_at(l, self.texture, inputs, self.lod, i);
             sum += self.texture.sample(l, s, t, lod);
             done += L::N;
             i += L::N;
@@ -177,4 +182,23 @@ impl Kernel for TextureLookups<'_> {
         let total = sum.r + sum.g + sum.b;
         (0..L::N).map(|k| total.lane(k)).sum()
     }
+}
+
+/// The scalar backend's loop of [`TextureLookups`], as a standalone symbol so that
+/// `scripts/check-scalar-asm.sh` can check its assembly (no packed float ops, no libm calls):
+/// the same generic code the `kernels` experiment times, monomorphised for `Scalar`.
+#[inline(never)]
+pub fn scalar_baseline_texture(
+    texture: &Texture,
+    inputs: &TextureInputs,
+    lookups: usize,
+    lod: LodMethod,
+) -> f32 {
+    TextureLookups {
+        texture,
+        inputs,
+        lookups,
+        lod,
+    }
+    .run(coherent_simd::scalar::Scalar)
 }

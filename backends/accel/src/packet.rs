@@ -92,10 +92,10 @@ impl<L: Lanes> Rays<L> {
 #[inline(always)]
 fn transform_vector<L: Lanes>(l: L, m: &Affine3A, v: &Vec3s<L>) -> Vec3s<L> {
     let (a, b, c) = (m.matrix3.x_axis, m.matrix3.y_axis, m.matrix3.z_axis);
-    // Written out, not through a closure: a closure here was not inlined into the pulp
+    // Written out, not through a closure: a closure here was not inlined into the
     // backends' `#[target_feature]` entry points, so every AVX-512 multiply and add of an
     // instance transform became a call (seen in `perf` of `coherent render car --backend
-    // pulp16`: `_mm512_mul_ps` and this function's closure as their own symbols).
+    // avx512`: `_mm512_mul_ps` and this function's closure as their own symbols).
     Vec3s::new(
         l.splat(a.x) * v.x + l.splat(b.x) * v.y + l.splat(c.x) * v.z,
         l.splat(a.y) * v.x + l.splat(b.y) * v.y + l.splat(c.y) * v.z,

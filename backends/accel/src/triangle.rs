@@ -26,7 +26,7 @@ use crate::Vec3s;
 /// rays each from inside, aimed exactly at shared vertices and edge points): with 0, 557,830
 /// of 7 * 10^6 rays leaked (7.5% on the icosphere: each triangle's own rounding puts an
 /// edge point outside it about half the time); with 2^-13, 1 ray leaked (a grazing ray in
-/// the torus), on the scalar, sse and pulp16 backends alike.
+/// the torus), on the scalar, sse and avx512 backends alike.
 pub const EDGE_EPS: f32 = 1.0 / 8192.0;
 
 /// Triangles whose height is below this fraction of their longest edge count as degenerate

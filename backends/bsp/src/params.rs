@@ -45,7 +45,7 @@ impl SahParams {
     ///
     /// Measured (`trace` example, primary rays, 1024x768, thread CPU time): leaf size 4 was as
     /// fast as 1 or faster at every width and scene, e.g. terrain 5.66 / 10.9 / 19.7 Mrays/s
-    /// (single / sse / pulp16) against 5.18 / 8.96 / 15.2 with leaf size 1, blob 6.91 / 16.4 /
+    /// (single / sse / avx512) against 5.18 / 8.96 / 15.2 with leaf size 1, blob 6.91 / 16.4 /
     /// 34.6 against 6.79 / 15.7 / 32.8, with half the nodes.
     pub fn default_preset() -> Self {
         Self {
@@ -109,7 +109,7 @@ pub struct TopParams {
 
 // Measured (`trace top` / `trace spheres`, 1,025 instances, thread CPU / wall on the 2-core
 // dev machine): leaf size 1 rebuilt in 1.29 ms, 2 in 0.69 ms, 4 in 0.35 ms, with primary-ray
-// speed unchanged within noise (single 3.7-3.8, pulp16 8.8-9.0 Mrays/s); 8 bins instead of 16
+// speed unchanged within noise (single 3.7-3.8, avx512 8.8-9.0 Mrays/s); 8 bins instead of 16
 // saved less (0.82 ms). Default: 16 bins, leaf size 4.
 
 impl Default for TopParams {
@@ -171,7 +171,7 @@ impl BspParams {
 /// Measured by the `accel` experiment's sweep (`accel_threshold.csv`, thresholds 0 to
 /// width / 2, primary, shadow and diffuse rays, `room` and `blob`, thread CPU time): 0 was
 /// the best or within noise of it for every kind, so one default serves all kinds. E.g. quick
-/// run on the dev machine (AVX-512): room shadow at width 16 (pulp16) 41.8 / 41.4 / 33.4 /
+/// run on the dev machine (AVX-512): room shadow at width 16 (avx512) 41.8 / 41.4 / 33.4 /
 /// 35.4 / 29.9 Mrays/s for thresholds 0 to 4; room diffuse at width 16 7.03 / 6.46 / 6.25 /
 /// 5.83 / 5.51; blob primary at width 16 18.5 / 17.2 / 14.6 / 12.6 / 10.7. Embree's hybrid
 /// switches below about 3/5/14 active lanes of 4/8/16, but a kd-tree packet step with one

@@ -351,8 +351,8 @@ bsp_tests!(sse, Backend::Sse);
 bsp_tests!(wide4, Backend::Wide4);
 bsp_tests!(wide8, Backend::Wide8);
 bsp_tests!(wide16, Backend::Wide16);
-bsp_tests!(pulp8, Backend::Pulp8);
-bsp_tests!(pulp16, Backend::Pulp16);
+bsp_tests!(avx2, Backend::Avx2);
+bsp_tests!(avx512, Backend::Avx512);
 
 #[test]
 fn object_presets_differ() {

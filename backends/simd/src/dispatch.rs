@@ -21,15 +21,20 @@ pub enum Backend {
     Wide8,
     /// 16 lanes on `wide::f32x16`.
     Wide16,
-    /// 8 lanes on pulp `V3` (AVX2 + FMA), chosen at run time.
+    /// 8 lanes, hand-written AVX2 + FMA intrinsics, chosen at run time.
+    Avx2,
+    /// 16 lanes, hand-written AVX-512 intrinsics, chosen at run time.
+    Avx512,
+    /// 8 lanes on pulp's portable operations, as pulp `V3` (AVX2 + FMA), chosen at run time.
     Pulp8,
-    /// 16 lanes on pulp `V4` (AVX-512), chosen at run time.
+    /// 16 lanes on pulp's portable operations, as pulp `V4` (AVX-512), chosen at run time.
     Pulp16,
 }
 
 /// A computation generic over the lane type, run by [`Backend::run`].
 ///
-/// Mark `run` `#[inline(always)]`, and everything it calls per packet too: the pulp backends
+/// Mark `run` `#[inline(always)]`, and everything it calls per packet too: the run-time
+/// dispatched backends (avx2, avx512, pulp8, pulp16)
 /// run it inside a `#[target_feature]` function, and code that is not inlined into it is
 /// compiled without AVX.
 pub trait Kernel {
@@ -56,12 +61,14 @@ pub enum BackendError {
 
 impl Backend {
     /// Every backend, narrowest first.
-    pub const ALL: [Backend; 7] = [
+    pub const ALL: [Backend; 9] = [
         Backend::Scalar,
         Backend::Sse,
         Backend::Wide4,
         Backend::Wide8,
         Backend::Wide16,
+        Backend::Avx2,
+        Backend::Avx512,
         Backend::Pulp8,
         Backend::Pulp16,
     ];
@@ -74,6 +81,8 @@ impl Backend {
             Backend::Wide4 => "wide4",
             Backend::Wide8 => "wide8",
             Backend::Wide16 => "wide16",
+            Backend::Avx2 => "avx2",
+            Backend::Avx512 => "avx512",
             Backend::Pulp8 => "pulp8",
             Backend::Pulp16 => "pulp16",
         }
@@ -84,8 +93,8 @@ impl Backend {
         match self {
             Backend::Scalar => 1,
             Backend::Sse | Backend::Wide4 => 4,
-            Backend::Wide8 | Backend::Pulp8 => 8,
-            Backend::Wide16 | Backend::Pulp16 => 16,
+            Backend::Wide8 | Backend::Avx2 | Backend::Pulp8 => 8,
+            Backend::Wide16 | Backend::Avx512 | Backend::Pulp16 => 16,
         }
     }
 
@@ -95,7 +104,7 @@ impl Backend {
             Backend::Scalar => true,
             Backend::Sse => cfg!(all(feature = "sse", target_arch = "x86_64")),
             Backend::Wide4 | Backend::Wide8 | Backend::Wide16 => cfg!(feature = "wide"),
-            Backend::Pulp8 | Backend::Pulp16 => {
+            Backend::Avx2 | Backend::Avx512 | Backend::Pulp8 | Backend::Pulp16 => {
                 cfg!(all(feature = "pulp", target_arch = "x86_64"))
             }
         }
@@ -109,8 +118,10 @@ impl Backend {
                     "the `sse` backend needs an x86-64 target (this build is for another architecture)"
                         .to_string()
                 }
-                Backend::Pulp8 | Backend::Pulp16 if cfg!(feature = "pulp") => {
-                    "the pulp backends need an x86-64 target".to_string()
+                Backend::Avx2 | Backend::Avx512 | Backend::Pulp8 | Backend::Pulp16
+                    if cfg!(feature = "pulp") =>
+                {
+                    format!("the `{}` backend needs an x86-64 target", self.name())
                 }
                 _ => format!(
                     "not compiled in: build with the cargo feature `{}`",
@@ -119,10 +130,10 @@ impl Backend {
             });
         }
         match self {
-            Backend::Pulp8 if !pulp8_supported() => {
+            Backend::Avx2 | Backend::Pulp8 if !v3_supported() => {
                 Some("this CPU lacks AVX2 or FMA (pulp V3)".to_string())
             }
-            Backend::Pulp16 if !pulp16_supported() => {
+            Backend::Avx512 | Backend::Pulp16 if !v4_supported() => {
                 Some("this CPU lacks AVX-512 F/BW/CD/DQ/VL (pulp V4)".to_string())
             }
             _ => None,
@@ -135,7 +146,7 @@ impl Backend {
             Backend::Scalar => "",
             Backend::Sse => "sse",
             Backend::Wide4 | Backend::Wide8 | Backend::Wide16 => "wide",
-            Backend::Pulp8 | Backend::Pulp16 => "pulp",
+            Backend::Avx2 | Backend::Avx512 | Backend::Pulp8 | Backend::Pulp16 => "pulp",
         }
     }
 
@@ -153,16 +164,83 @@ impl Backend {
     }
 
     /// The usable backend to measure at a packet width: the hand-written or run-time
-    /// dispatched one (scalar, sse, pulp8, pulp16) where this CPU runs it, else `wide`.
+    /// dispatched one (scalar, sse, avx2, avx512) where this CPU runs it, else `wide`.
     pub fn preferred_for_lanes(lanes: usize) -> Option<Backend> {
         let prefs: &[Backend] = match lanes {
             1 => &[Backend::Scalar],
             4 => &[Backend::Sse, Backend::Wide4],
-            8 => &[Backend::Pulp8, Backend::Wide8],
-            16 => &[Backend::Pulp16, Backend::Wide16],
+            8 => &[Backend::Avx2, Backend::Wide8],
+            16 => &[Backend::Avx512, Backend::Wide16],
             _ => &[],
         };
         prefs.iter().copied().find(|b| b.is_available())
+    }
+
+    /// The widest hand-written or run-time dispatched backend usable here (the default for
+    /// rendering): avx512, else avx2, else sse, else the widest `wide`, else scalar.
+    pub fn widest() -> Backend {
+        [16, 8, 4]
+            .into_iter()
+            .find_map(Backend::preferred_for_lanes)
+            .unwrap_or(Backend::Scalar)
+    }
+
+    /// The backends this machine must run, from `COHERENT_REQUIRE_BACKENDS`: a comma-separated
+    /// list of names, or `native-all` (every compiled-in backend whose instructions the CPU
+    /// reports, checked with `std`'s feature detection, independently of pulp's tokens).
+    /// Unset or empty: none. An unknown name is an error.
+    pub fn required() -> Result<Vec<Backend>, BackendError> {
+        let spec = std::env::var(REQUIRE_ENV).unwrap_or_default();
+        let spec = spec.trim();
+        if spec.eq_ignore_ascii_case("native-all") {
+            return Ok(Backend::ALL
+                .into_iter()
+                .filter(|b| b.compiled() && cpu_reports(*b))
+                .collect());
+        }
+        spec.split(',')
+            .map(str::trim)
+            .filter(|n| !n.is_empty())
+            .map(str::parse)
+            .collect()
+    }
+
+    /// The backends that cannot run here, each with the reason.
+    pub fn skipped() -> Vec<(Backend, String)> {
+        Backend::ALL
+            .into_iter()
+            .filter_map(|b| b.unavailable_reason().map(|r| (b, r)))
+            .collect()
+    }
+
+    /// The backends tests stamp: those usable here. Prints each skipped backend by name, and
+    /// panics (failing the test) when `COHERENT_REQUIRE_BACKENDS` names one that cannot run
+    /// here, or names an unknown backend: a test cannot pass by skipping a backend CI's CPU has.
+    pub fn usable() -> Vec<Backend> {
+        if let Err(e) = Backend::check_required() {
+            panic!("{e}");
+        }
+        for (b, why) in Backend::skipped() {
+            eprintln!("skipping backend {b}: {why}");
+        }
+        Backend::available()
+    }
+
+    /// `Err` naming every backend `COHERENT_REQUIRE_BACKENDS` requires that cannot run here.
+    pub fn check_required() -> Result<(), String> {
+        let required = Backend::required().map_err(|e| format!("{REQUIRE_ENV}: {e}"))?;
+        let missing: Vec<String> = required
+            .into_iter()
+            .filter_map(|b| b.unavailable_reason().map(|r| format!("{b} ({r})")))
+            .collect();
+        if missing.is_empty() {
+            Ok(())
+        } else {
+            Err(format!(
+                "{REQUIRE_ENV} requires backends that cannot run here: {}",
+                missing.join("; ")
+            ))
+        }
     }
 
     fn available_list() -> String {
@@ -193,20 +271,32 @@ impl Backend {
             #[cfg(feature = "wide")]
             Backend::Wide16 => Ok(k.run(crate::wide::Wide16)),
             #[cfg(all(feature = "pulp", target_arch = "x86_64"))]
-            Backend::Pulp8 => {
-                let l = crate::pulp::Pulp8::try_new().expect("checked by unavailable_reason");
+            Backend::Avx2 => {
+                let l = crate::avx2::Avx2::try_new().expect("checked by unavailable_reason");
                 Ok(l.simd().vectorize(
                     #[inline(always)]
                     move || k.run(l),
                 ))
             }
             #[cfg(all(feature = "pulp", target_arch = "x86_64"))]
-            Backend::Pulp16 => {
-                let l = crate::pulp::Pulp16::try_new().expect("checked by unavailable_reason");
+            Backend::Avx512 => {
+                let l = crate::avx512::Avx512::try_new().expect("checked by unavailable_reason");
                 Ok(l.simd().vectorize(
                     #[inline(always)]
                     move || k.run(l),
                 ))
+            }
+            // The portable backends: pulp calls `WithKernel::with_simd` with its token inside
+            // the token's `#[target_feature]` entry point.
+            #[cfg(all(feature = "pulp", target_arch = "x86_64"))]
+            Backend::Pulp8 => {
+                let s = pulp::x86::V3::try_new().expect("checked by unavailable_reason");
+                Ok(pulp::Simd::vectorize(s, crate::pulp::WithKernel(k)))
+            }
+            #[cfg(all(feature = "pulp", target_arch = "x86_64"))]
+            Backend::Pulp16 => {
+                let s = pulp::x86::V4::try_new().expect("checked by unavailable_reason");
+                Ok(pulp::Simd::vectorize(s, crate::pulp::WithKernel(k)))
             }
             #[allow(unreachable_patterns)]
             _ => unreachable!("{} is not compiled in, checked above", self.name()),
@@ -214,20 +304,51 @@ impl Backend {
     }
 }
 
+/// The environment variable naming the backends a test run must not skip.
+pub const REQUIRE_ENV: &str = "COHERENT_REQUIRE_BACKENDS";
+
+/// Whether the CPU reports the instructions `b` needs (`std` detection, not pulp's).
+fn cpu_reports(b: Backend) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::is_x86_feature_detected as has;
+        match b {
+            Backend::Avx2 | Backend::Pulp8 => has!("avx2") && has!("fma"),
+            Backend::Avx512 | Backend::Pulp16 => {
+                has!("avx512f")
+                    && has!("avx512bw")
+                    && has!("avx512cd")
+                    && has!("avx512dq")
+                    && has!("avx512vl")
+            }
+            _ => true,
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        !matches!(
+            b,
+            Backend::Sse | Backend::Avx2 | Backend::Avx512 | Backend::Pulp8 | Backend::Pulp16
+        )
+    }
+}
+
+/// Whether this CPU runs pulp's `V3` (AVX2 + FMA): avx2 and pulp8.
 #[cfg(all(feature = "pulp", target_arch = "x86_64"))]
-fn pulp8_supported() -> bool {
-    crate::pulp::Pulp8::try_new().is_some()
+fn v3_supported() -> bool {
+    pulp::x86::V3::try_new().is_some()
 }
 #[cfg(not(all(feature = "pulp", target_arch = "x86_64")))]
-fn pulp8_supported() -> bool {
+fn v3_supported() -> bool {
     false
 }
+/// Whether this CPU runs pulp's `V4` (AVX-512 F/BW/CD/DQ/VL): avx512 and pulp16.
 #[cfg(all(feature = "pulp", target_arch = "x86_64"))]
-fn pulp16_supported() -> bool {
-    crate::pulp::Pulp16::try_new().is_some()
+fn v4_supported() -> bool {
+    pulp::x86::V4::try_new().is_some()
 }
 #[cfg(not(all(feature = "pulp", target_arch = "x86_64")))]
-fn pulp16_supported() -> bool {
+fn v4_supported() -> bool {
     false
 }
 
@@ -271,9 +392,31 @@ mod tests {
     fn unknown_name_lists_backends() {
         let e = "avx9".parse::<Backend>().unwrap_err().to_string();
         assert!(
-            e.contains("avx9") && e.contains("scalar") && e.contains("pulp16"),
+            e.contains("avx9")
+                && e.contains("scalar")
+                && e.contains("avx512")
+                && e.contains("pulp16"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn required_backends_run_here() {
+        // Fails when COHERENT_REQUIRE_BACKENDS names a backend this machine skips.
+        let usable = Backend::usable();
+        for b in Backend::required().unwrap() {
+            assert!(usable.contains(&b), "{b} required but not usable");
+        }
+    }
+
+    #[test]
+    fn native_all_matches_the_tokens() {
+        // std's feature detection and pulp's tokens agree on what this CPU runs.
+        for b in Backend::ALL {
+            if b.compiled() {
+                assert_eq!(cpu_reports(b), b.is_available(), "{b}");
+            }
+        }
     }
 
     #[test]

@@ -14,11 +14,17 @@ pub mod vec3;
 pub use lanes::{Lanes, MAX_LANES, SimdF32, SimdI32, SimdMask};
 pub use vec3::{Rgbs, Vec3s};
 #[cfg(all(feature = "pulp", target_arch = "x86_64"))]
+pub mod avx2;
+#[cfg(all(feature = "pulp", target_arch = "x86_64"))]
+pub mod avx512;
+#[cfg(feature = "pulp")]
 pub mod pulp;
 #[cfg(all(feature = "sse", target_arch = "x86_64"))]
 pub mod sse;
 #[cfg(feature = "wide")]
 pub mod wide;
+#[cfg(all(feature = "pulp", target_arch = "x86_64"))]
+mod x86;
 
 pub mod dispatch;
 

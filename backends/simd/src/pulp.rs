@@ -1,993 +1,600 @@
-//! The `pulp` backends: `pulp8` on pulp's `V3` (AVX2 + FMA, 8 lanes) and `pulp16` on its `V4`
-//! (AVX-512 F/BW/CD/DQ/VL, 16 lanes with `__mmask16` masks), chosen at run time.
+//! The portable `pulp` backends: one implementation of the lane trait, generic over
+//! `S: pulp::Simd`, written only with pulp's portable operations (`add_f32s`, `less_than_f32s`,
+//! `select_f32s`, ...; no `core::arch`). [`crate::dispatch`] runs it as `pulp8` on pulp's `V3`
+//! (AVX2 + FMA, 8 lanes) and `pulp16` on its `V4` (AVX-512, 16 lanes) through
+//! `Simd::vectorize` and [`pulp::WithSimd`], the entry point `pulp::Arch::dispatch` uses; the
+//! same code compiles for any other `Simd` pulp has (NEON, ...). Paper section 3's packets at
+//! the width the token's registers hold.
 //!
-//! pulp supplies the run-time detection (`V3::try_new`, `V4::try_new`), the zero-sized proof
-//! tokens and the `#[target_feature]` entry point (`V3::vectorize`, `V4::vectorize`) that
-//! [`crate::dispatch`] runs kernels through. The lane types below can only be made through a
-//! [`Pulp8`]/[`Pulp16`] token, which can only be made from a pulp token, so a lane value is
-//! itself proof that the CPU has the instructions its operations use: that is the safety
-//! argument of every `unsafe` intrinsic call in this file. Every operation is
-//! `#[inline(always)]` so that it is compiled inside the kernel's `#[target_feature]`
-//! function; a call that is not inlined loses the features (and costs far more than the
-//! operation).
+//! This is the testbed's answer to "what does portability cost": the hand-written
+//! `avx2`/`avx512` backends do the same work with intrinsics.
+//!
+//! pulp 0.22 has no operation for some of the lane trait; these are written here on top of
+//! pulp, portably, and keep the trait's semantics bit for bit (checked by `tests/lanes.rs`):
+//! - gathers: lane by lane through an array (pulp has no gather);
+//! - `floor`/`round`: the add-2^23 trick with pulp's add/sub/compare/select;
+//! - `i32 -> f32`: the two 16-bit halves through the 2^23 exponent trick, one rounding;
+//! - `f32 -> i32` (truncating, out of range to `i32::MIN`): from the exponent and mantissa
+//!   bits with pulp's variable shifts;
+//! - arithmetic `>>`: the logical shift of `x ^ sign` xor `sign`;
+//! - `min`/`max`: compare and select (pulp's `min_f32s` follows the target's NaN rule);
+//! - `rsqrt`/`recip`: exact (`1 / sqrt`, `1 /`; pulp has no estimate instructions);
+//! - mask `any`/`all`/`bitmask`: the mask as 0.0/1.0 (or per-lane powers of two) summed with
+//!   pulp's `reduce_sum_f32s` (pulp has no movemask);
+//! - `store_masked`: load, select, store; `reduce_min`/`reduce_max`: lane by lane.
+//!
+//! Every method is `#[inline(always)]` so that it compiles inside the `#[target_feature]`
+//! function `vectorize` runs the kernel in.
 
-use core::arch::x86_64::*;
 use core::fmt;
 use core::ops::{
     Add, AddAssign, BitAnd, BitAndAssign, BitOr, BitOrAssign, BitXor, Div, DivAssign, Mul,
     MulAssign, Neg, Not, Shl, Shr, Sub, SubAssign,
 };
 
-use pulp::x86::{V3, V4};
+use pulp::Simd;
 
-use crate::lanes::{Lanes, SimdF32, SimdI32, SimdMask};
+use crate::lanes::{Lanes, MAX_LANES, SimdF32, SimdI32, SimdMask};
 
-/// 8 lanes on pulp's `V3` (AVX2 + FMA).
+/// The lane backend on pulp's portable operations for the token `S` (zero-sized: the token
+/// proves the CPU has `S`'s instructions).
 #[derive(Clone, Copy, Debug)]
-pub struct Pulp8(V3);
-/// 16 lanes on pulp's `V4` (AVX-512).
-#[derive(Clone, Copy, Debug)]
-pub struct Pulp16(V4);
+pub struct PulpLanes<S: Simd>(S);
 
-impl Pulp8 {
-    /// The token, if this CPU has AVX2 and FMA.
-    #[inline]
-    pub fn try_new() -> Option<Pulp8> {
-        V3::try_new().map(Pulp8)
+impl<S: Simd> PulpLanes<S> {
+    /// The backend on a pulp token (which proves the CPU can run `S`).
+    #[inline(always)]
+    pub fn new(simd: S) -> Self {
+        PulpLanes(simd)
     }
     /// The pulp token this backend runs on.
     #[inline(always)]
-    pub fn simd(self) -> V3 {
-        self.0
-    }
-}
-impl Pulp16 {
-    /// The token, if this CPU has AVX-512 F/BW/CD/DQ/VL.
-    #[inline]
-    pub fn try_new() -> Option<Pulp16> {
-        V4::try_new().map(Pulp16)
-    }
-    /// The pulp token this backend runs on.
-    #[inline(always)]
-    pub fn simd(self) -> V4 {
+    pub fn simd(self) -> S {
         self.0
     }
 }
 
-/// Checks gather indices against `len` with one compare (all lanes in `0..len`).
-#[inline(always)]
-fn gather_check(ok: bool, idx: &[i32], len: usize) {
-    if !ok {
-        let bad = idx
-            .iter()
-            .find(|&&i| i < 0 || i as usize >= len)
-            .copied()
-            .unwrap_or(-1);
-        panic!("gather index {bad} outside a table of {len}");
+/// `pulp8`: the portable backend on `V3` (AVX2 + FMA, 8 lanes).
+#[cfg(target_arch = "x86_64")]
+pub type Pulp8 = PulpLanes<pulp::x86::V3>;
+/// `pulp16`: the portable backend on `V4` (AVX-512, 16 lanes).
+#[cfg(target_arch = "x86_64")]
+pub type Pulp16 = PulpLanes<pulp::x86::V4>;
+
+/// Runs a [`crate::Kernel`] with the lanes of whatever token pulp calls it with: the
+/// [`pulp::WithSimd`] that `vectorize`/`Arch::dispatch` take.
+pub struct WithKernel<K>(pub K);
+
+impl<K: crate::Kernel> pulp::WithSimd for WithKernel<K> {
+    type Output = K::Output;
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, simd: S) -> K::Output {
+        self.0.run(PulpLanes(simd))
     }
 }
 
-// ---------------------------------------------------------------- pulp8: AVX2 + FMA, 8 lanes
+/// `f32` lanes.
+#[derive(Clone, Copy)]
+pub struct PF32<S: Simd>(S::f32s, S);
+/// `i32` lanes.
+#[derive(Clone, Copy)]
+pub struct PI32<S: Simd>(S::i32s, S);
+/// Mask lanes.
+#[derive(Clone, Copy)]
+pub struct PM32<S: Simd>(S::m32s, S);
 
-/// Eight `f32` lanes (AVX).
-#[derive(Clone, Copy)]
-#[repr(transparent)]
-pub struct F32x8(__m256);
-/// Eight `i32` lanes (AVX2).
-#[derive(Clone, Copy)]
-#[repr(transparent)]
-pub struct I32x8(__m256i);
-/// Eight mask lanes (all-ones `f32` bit patterns).
-#[derive(Clone, Copy)]
-#[repr(transparent)]
-pub struct M32x8(__m256);
+/// 2^23: at and above it every `f32` is an integer.
+const TWO23: f32 = 8_388_608.0;
 
-impl F32x8 {
-    /// The lanes as an array.
+/// Lane `i` holds `i`.
+const IOTA: [i32; MAX_LANES] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15];
+/// Lane `i` holds `1 << i`.
+const LANE_BITS: [i32; MAX_LANES] = [
+    1, 2, 4, 8, 16, 32, 64, 128, 256, 512, 1024, 2048, 4096, 8192, 16384, 32768,
+];
+/// Lane `i` holds `2^i` as `f32` bits.
+const LANE_POW2: [u32; MAX_LANES] = [
+    0x3f80_0000,
+    0x4000_0000,
+    0x4080_0000,
+    0x4100_0000,
+    0x4180_0000,
+    0x4200_0000,
+    0x4280_0000,
+    0x4300_0000,
+    0x4380_0000,
+    0x4400_0000,
+    0x4480_0000,
+    0x4500_0000,
+    0x4580_0000,
+    0x4600_0000,
+    0x4680_0000,
+    0x4700_0000,
+];
+
+impl<S: Simd> PF32<S> {
     #[inline(always)]
-    pub fn to_array(self) -> [f32; 8] {
-        let mut a = [0.0; 8];
+    fn w(&self, v: S::f32s) -> Self {
+        PF32(v, self.1)
+    }
+    #[inline(always)]
+    fn splat(&self, x: f32) -> S::f32s {
+        self.1.splat_f32s(x)
+    }
+    #[inline(always)]
+    fn to_array(self) -> [f32; MAX_LANES] {
+        let mut a = [0.0; MAX_LANES];
         self.store(&mut a);
         a
     }
+    /// Lanes below 2^23 in magnitude (not NaN): the ones with a fraction to round.
     #[inline(always)]
-    fn has_fraction(self) -> __m256 {
-        unsafe {
-            _mm256_cmp_ps::<_CMP_LT_OQ>(
-                _mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0),
-                _mm256_set1_ps(8388608.0),
-            )
-        }
+    fn has_fraction(self) -> S::m32s {
+        let s = self.1;
+        s.less_than_f32s(s.abs_f32s(self.0), s.splat_f32s(TWO23))
     }
 }
-impl I32x8 {
-    /// The lanes as an array.
+impl<S: Simd> PI32<S> {
     #[inline(always)]
-    pub fn to_array(self) -> [i32; 8] {
-        let mut a = [0; 8];
+    fn u(self) -> S::u32s {
+        self.1.transmute_u32s_i32s(self.0)
+    }
+    #[inline(always)]
+    fn from_u(s: S, v: S::u32s) -> Self {
+        PI32(s.transmute_i32s_u32s(v), s)
+    }
+    #[inline(always)]
+    fn to_array(self) -> [i32; MAX_LANES] {
+        let mut a = [0; MAX_LANES];
         self.store(&mut a);
         a
     }
-}
-impl fmt::Debug for F32x8 {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "F32x8{:?}", self.to_array())
+    /// Logical right shift by a per-lane amount (below 32).
+    #[inline(always)]
+    fn shr_dyn(self, n: S::u32s) -> Self {
+        Self::from_u(self.1, self.1.wrapping_dyn_shr_u32s(self.u(), n))
     }
 }
-impl fmt::Debug for I32x8 {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "I32x8{:?}", self.to_array())
-    }
-}
-impl fmt::Debug for M32x8 {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "M32x8({:08b})", self.bitmask())
+impl<S: Simd> PM32<S> {
+    /// The mask as `f32` lanes: `x` where on, `0.0` where off.
+    #[inline(always)]
+    fn sum_of(self, x: S::f32s) -> f32 {
+        let s = self.1;
+        s.reduce_sum_f32s(s.select_f32s(self.0, x, s.splat_f32s(0.0)))
     }
 }
 
-impl Lanes for Pulp8 {
-    const N: usize = 8;
-    type F32s = F32x8;
-    type I32s = I32x8;
-    type Mask = M32x8;
+impl<S: Simd> fmt::Debug for PF32<S> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "PF32{:?}", &self.to_array()[..S::F32_LANES])
+    }
+}
+impl<S: Simd> fmt::Debug for PI32<S> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "PI32{:?}", &self.to_array()[..S::I32_LANES])
+    }
+}
+impl<S: Simd> fmt::Debug for PM32<S> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "PM32({:b})", self.bitmask())
+    }
+}
+
+impl<S: Simd> Lanes for PulpLanes<S> {
+    const N: usize = S::F32_LANES;
+    type F32s = PF32<S>;
+    type I32s = PI32<S>;
+    type Mask = PM32<S>;
 
     #[inline(always)]
-    fn splat(self, x: f32) -> F32x8 {
-        F32x8(unsafe { _mm256_set1_ps(x) })
+    fn splat(self, x: f32) -> PF32<S> {
+        PF32(self.0.splat_f32s(x), self.0)
     }
     #[inline(always)]
-    fn splat_i32(self, x: i32) -> I32x8 {
-        I32x8(unsafe { _mm256_set1_epi32(x) })
+    fn splat_i32(self, x: i32) -> PI32<S> {
+        PI32(self.0.splat_i32s(x), self.0)
     }
     #[inline(always)]
-    fn splat_mask(self, b: bool) -> M32x8 {
-        M32x8(unsafe { _mm256_castsi256_ps(_mm256_set1_epi32(-(b as i32))) })
+    fn splat_mask(self, b: bool) -> PM32<S> {
+        // A compare, not a transmute: pulp's V4 masks are bit masks (`b16`), not lanes.
+        let s = self.0;
+        PM32(s.equal_u32s(s.splat_u32s(0), s.splat_u32s(!b as u32)), s)
     }
     #[inline(always)]
-    fn lane_ids(self) -> I32x8 {
-        I32x8(unsafe { _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7) })
+    fn lane_ids(self) -> PI32<S> {
+        self.load_i32(&IOTA)
     }
     #[inline(always)]
-    fn load(self, s: &[f32]) -> F32x8 {
-        let s = &s[..8];
-        F32x8(unsafe { _mm256_loadu_ps(s.as_ptr()) })
+    fn load(self, s: &[f32]) -> PF32<S> {
+        let (v, _) = S::as_simd_f32s(&s[..Self::N]);
+        PF32(v[0], self.0)
     }
     #[inline(always)]
-    fn load_i32(self, s: &[i32]) -> I32x8 {
-        let s = &s[..8];
-        I32x8(unsafe { _mm256_loadu_si256(s.as_ptr().cast()) })
+    fn load_i32(self, s: &[i32]) -> PI32<S> {
+        let (v, _) = S::as_simd_i32s(&s[..Self::N]);
+        PI32(v[0], self.0)
     }
     #[inline(always)]
-    fn mask_from_bits(self, bits: u32) -> M32x8 {
-        unsafe {
-            let lanes = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-            let b = _mm256_and_si256(_mm256_set1_epi32(bits as i32), lanes);
-            M32x8(_mm256_castsi256_ps(_mm256_cmpeq_epi32(b, lanes)))
+    fn mask_from_bits(self, bits: u32) -> PM32<S> {
+        let s = self.0;
+        let lanes = self.load_i32(&LANE_BITS).0;
+        let b = s.and_i32s(s.splat_i32s(bits as i32), lanes);
+        PM32(s.equal_i32s(b, lanes), s)
+    }
+    /// Lane by lane through an array (pulp has no gather).
+    #[inline(always)]
+    fn gather(self, table: &[f32], idx: PI32<S>) -> PF32<S> {
+        let ix = idx.to_array();
+        let mut out = [0.0f32; MAX_LANES];
+        for i in 0..Self::N {
+            out[i] = table[usize::try_from(ix[i]).unwrap_or(usize::MAX)];
         }
+        self.load(&out)
     }
+    /// Lane by lane through an array (pulp has no gather).
     #[inline(always)]
-    fn gather(self, table: &[f32], idx: I32x8) -> F32x8 {
-        let ok = in_range8(idx, table.len());
-        if !ok {
-            gather_check(ok, &idx.to_array(), table.len());
+    fn gather_u32(self, table: &[u32], idx: PI32<S>) -> PI32<S> {
+        let ix = idx.to_array();
+        let mut out = [0i32; MAX_LANES];
+        for i in 0..Self::N {
+            out[i] = table[usize::try_from(ix[i]).unwrap_or(usize::MAX)] as i32;
         }
-        // SAFETY: every index was checked to lie in `0..table.len()`.
-        F32x8(unsafe { _mm256_i32gather_ps::<4>(table.as_ptr(), idx.0) })
+        self.load_i32(&out)
     }
+    /// Lane by lane through two arrays: both ends of each interval in one pass.
     #[inline(always)]
-    fn gather_u32(self, table: &[u32], idx: I32x8) -> I32x8 {
-        let ok = in_range8(idx, table.len());
-        if !ok {
-            gather_check(ok, &idx.to_array(), table.len());
-        }
-        // SAFETY: every index was checked to lie in `0..table.len()`.
-        I32x8(unsafe { _mm256_i32gather_epi32::<4>(table.as_ptr().cast(), idx.0) })
-    }
-    #[inline(always)]
-    fn gather2(self, table: &[f32], idx: I32x8) -> (F32x8, F32x8) {
+    fn gather2(self, table: &[f32], idx: PI32<S>) -> (PF32<S>, PF32<S>) {
         let n = table.len().saturating_sub(1);
-        let ok = in_range8(idx, n);
-        if !ok {
-            gather_check(ok, &idx.to_array(), n);
+        let ix = idx.to_array();
+        let mut lo = [0.0f32; MAX_LANES];
+        let mut hi = [0.0f32; MAX_LANES];
+        for i in 0..Self::N {
+            let j = usize::try_from(ix[i]).unwrap_or(usize::MAX);
+            assert!(j < n, "gather index {} outside a table of {n}", ix[i]);
+            lo[i] = table[j];
+            hi[i] = table[j + 1];
         }
-        // SAFETY: every `idx + 1` was checked to lie inside `table`; each 64-bit element is
-        // the pair (table[i], table[i + 1]), read unaligned at 4-byte scale.
-        unsafe {
-            let base = table.as_ptr() as *const i64;
-            let q0 = _mm256_castsi256_ps(_mm256_i32gather_epi64::<4>(
-                base,
-                _mm256_castsi256_si128(idx.0),
-            ));
-            let q1 = _mm256_castsi256_ps(_mm256_i32gather_epi64::<4>(
-                base,
-                _mm256_extracti128_si256::<1>(idx.0),
-            ));
-            // Per 128-bit half: evens (odds) of q0 then q1; then put the 64-bit chunks in order.
-            let lo = _mm256_shuffle_ps::<0b10_00_10_00>(q0, q1);
-            let hi = _mm256_shuffle_ps::<0b11_01_11_01>(q0, q1);
-            let order = |v: __m256| {
-                _mm256_castpd_ps(_mm256_permute4x64_pd::<0b11_01_10_00>(_mm256_castps_pd(v)))
-            };
-            (F32x8(order(lo)), F32x8(order(hi)))
-        }
+        (self.load(&lo), self.load(&hi))
     }
 }
 
-#[inline(always)]
-fn in_range8(idx: I32x8, len: usize) -> bool {
-    let len = len.min(i32::MAX as usize) as i32;
-    unsafe {
-        let ge0 = _mm256_cmpgt_epi32(idx.0, _mm256_set1_epi32(-1));
-        let ltn = _mm256_cmpgt_epi32(_mm256_set1_epi32(len), idx.0);
-        _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_and_si256(ge0, ltn))) == 0xff
-    }
-}
-
-macro_rules! f32x8_ops {
-    ($($tr:ident $f:ident $atr:ident $af:ident $intr:ident),*) => {$(
-        impl $tr for F32x8 {
-            type Output = F32x8;
+macro_rules! f32_ops {
+    ($($tr:ident $f:ident $atr:ident $af:ident $op:ident),*) => {$(
+        impl<S: Simd> $tr for PF32<S> {
+            type Output = PF32<S>;
             #[inline(always)]
-            fn $f(self, o: F32x8) -> F32x8 {
-                F32x8(unsafe { $intr(self.0, o.0) })
+            fn $f(self, o: PF32<S>) -> PF32<S> {
+                self.w(self.1.$op(self.0, o.0))
             }
         }
-        impl $tr<f32> for F32x8 {
-            type Output = F32x8;
+        impl<S: Simd> $tr<f32> for PF32<S> {
+            type Output = PF32<S>;
             #[inline(always)]
-            fn $f(self, o: f32) -> F32x8 {
-                F32x8(unsafe { $intr(self.0, _mm256_set1_ps(o)) })
+            fn $f(self, o: f32) -> PF32<S> {
+                self.w(self.1.$op(self.0, self.splat(o)))
             }
         }
-        impl $atr for F32x8 {
+        impl<S: Simd> $atr for PF32<S> {
             #[inline(always)]
-            fn $af(&mut self, o: F32x8) {
-                self.0 = unsafe { $intr(self.0, o.0) };
+            fn $af(&mut self, o: PF32<S>) {
+                self.0 = self.1.$op(self.0, o.0);
             }
         }
     )*};
 }
-f32x8_ops!(
-    Add add AddAssign add_assign _mm256_add_ps,
-    Sub sub SubAssign sub_assign _mm256_sub_ps,
-    Mul mul MulAssign mul_assign _mm256_mul_ps,
-    Div div DivAssign div_assign _mm256_div_ps
+f32_ops!(
+    Add add AddAssign add_assign add_f32s,
+    Sub sub SubAssign sub_assign sub_f32s,
+    Mul mul MulAssign mul_assign mul_f32s,
+    Div div DivAssign div_assign div_f32s
 );
-impl Neg for F32x8 {
-    type Output = F32x8;
+impl<S: Simd> Neg for PF32<S> {
+    type Output = PF32<S>;
     #[inline(always)]
-    fn neg(self) -> F32x8 {
-        F32x8(unsafe { _mm256_xor_ps(self.0, _mm256_set1_ps(-0.0)) })
+    fn neg(self) -> PF32<S> {
+        self.w(self.1.xor_f32s(self.0, self.splat(-0.0)))
     }
 }
 
-macro_rules! cmp8 {
-    ($a:expr, $b:expr, $imm:ident) => {
-        M32x8(unsafe { _mm256_cmp_ps::<$imm>($a, $b) })
-    };
-}
-
-impl SimdF32 for F32x8 {
-    type Mask = M32x8;
-    type I32s = I32x8;
+impl<S: Simd> SimdF32 for PF32<S> {
+    type Mask = PM32<S>;
+    type I32s = PI32<S>;
 
     #[inline(always)]
-    fn lt(self, o: F32x8) -> M32x8 {
-        cmp8!(self.0, o.0, _CMP_LT_OQ)
+    fn lt(self, o: Self) -> PM32<S> {
+        PM32(self.1.less_than_f32s(self.0, o.0), self.1)
     }
     #[inline(always)]
-    fn le(self, o: F32x8) -> M32x8 {
-        cmp8!(self.0, o.0, _CMP_LE_OQ)
+    fn le(self, o: Self) -> PM32<S> {
+        PM32(self.1.less_than_or_equal_f32s(self.0, o.0), self.1)
     }
     #[inline(always)]
-    fn gt(self, o: F32x8) -> M32x8 {
-        cmp8!(self.0, o.0, _CMP_GT_OQ)
+    fn gt(self, o: Self) -> PM32<S> {
+        PM32(self.1.greater_than_f32s(self.0, o.0), self.1)
     }
     #[inline(always)]
-    fn ge(self, o: F32x8) -> M32x8 {
-        cmp8!(self.0, o.0, _CMP_GE_OQ)
+    fn ge(self, o: Self) -> PM32<S> {
+        PM32(self.1.greater_than_or_equal_f32s(self.0, o.0), self.1)
     }
     #[inline(always)]
-    fn eq(self, o: F32x8) -> M32x8 {
-        cmp8!(self.0, o.0, _CMP_EQ_OQ)
+    fn eq(self, o: Self) -> PM32<S> {
+        PM32(self.1.equal_f32s(self.0, o.0), self.1)
     }
     #[inline(always)]
-    fn ne(self, o: F32x8) -> M32x8 {
-        cmp8!(self.0, o.0, _CMP_NEQ_UQ)
+    fn ne(self, o: Self) -> PM32<S> {
+        !self.eq(o)
     }
     #[inline(always)]
-    fn min(self, o: F32x8) -> F32x8 {
-        F32x8(unsafe { _mm256_min_ps(self.0, o.0) })
+    fn min(self, o: Self) -> Self {
+        self.lt(o).select(self, o)
     }
     #[inline(always)]
-    fn max(self, o: F32x8) -> F32x8 {
-        F32x8(unsafe { _mm256_max_ps(self.0, o.0) })
+    fn max(self, o: Self) -> Self {
+        self.gt(o).select(self, o)
     }
     #[inline(always)]
-    fn abs(self) -> F32x8 {
-        F32x8(unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0) })
+    fn abs(self) -> Self {
+        self.w(self.1.abs_f32s(self.0))
     }
     #[inline(always)]
-    fn sqrt(self) -> F32x8 {
-        F32x8(unsafe { _mm256_sqrt_ps(self.0) })
+    fn sqrt(self) -> Self {
+        self.w(self.1.sqrt_f32s(self.0))
+    }
+    /// Exact `1 / sqrt` (pulp has no estimate).
+    #[inline(always)]
+    fn rsqrt(self) -> Self {
+        self.w(self.1.div_f32s(self.splat(1.0), self.1.sqrt_f32s(self.0)))
+    }
+    /// Exact `1 /` (pulp has no estimate).
+    #[inline(always)]
+    fn recip(self) -> Self {
+        self.w(self.1.div_f32s(self.splat(1.0), self.0))
     }
     #[inline(always)]
-    fn rsqrt(self) -> F32x8 {
-        F32x8(unsafe { _mm256_rsqrt_ps(self.0) })
+    fn floor(self) -> Self {
+        // round to nearest, then one down where that went up; `r - 1` keeps -0 for -0.
+        let r = self.round();
+        let s = self.1;
+        let down = s.sub_f32s(r.0, self.splat(1.0));
+        // NaN and |x| >= 2^23 come back from `round` unchanged and are not above themselves.
+        self.w(s.select_f32s(s.greater_than_f32s(r.0, self.0), down, r.0))
     }
     #[inline(always)]
-    fn recip(self) -> F32x8 {
-        F32x8(unsafe { _mm256_rcp_ps(self.0) })
+    fn round(self) -> Self {
+        // |x| + 2^23 - 2^23 rounds |x| < 2^23 to nearest even; copy the sign back (keeps -0).
+        let s = self.1;
+        let a = s.abs_f32s(self.0);
+        let r = s.sub_f32s(s.add_f32s(a, self.splat(TWO23)), self.splat(TWO23));
+        let r = self.w(r).copysign(self);
+        self.w(s.select_f32s(self.has_fraction(), r.0, self.0))
     }
     #[inline(always)]
-    fn floor(self) -> F32x8 {
-        // roundps would quiet a signalling NaN; keep non-fractional lanes as they are.
-        unsafe {
-            let r = _mm256_round_ps::<{ _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC }>(self.0);
-            F32x8(_mm256_blendv_ps(self.0, r, self.has_fraction()))
-        }
+    fn mul_add(self, b: Self, c: Self) -> Self {
+        self.w(self.1.mul_add_f32s(self.0, b.0, c.0))
     }
     #[inline(always)]
-    fn round(self) -> F32x8 {
-        unsafe {
-            let r = _mm256_round_ps::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(self.0);
-            F32x8(_mm256_blendv_ps(self.0, r, self.has_fraction()))
-        }
+    fn to_i32(self) -> PI32<S> {
+        // From the bits: |x| = m * 2^(e - 150) with the implicit bit in m.
+        let s = self.1;
+        let bits = self.to_bits();
+        let e = (bits.shr_logical(23) & bits.splat_same(0xff)).u();
+        let m = (bits & bits.splat_same(0x007f_ffff)) | bits.splat_same(0x0080_0000);
+        let sh_left = s.sub_u32s(e, s.splat_u32s(150)); // e >= 150: m << (e - 150)
+        let sh_right = s.sub_u32s(s.splat_u32s(150), e); // e < 150: m >> (150 - e)
+        let left = PI32::from_u(s, s.wrapping_dyn_shl_u32s(m.u(), sh_left));
+        let right = m.shr_dyn(sh_right);
+        let big = PI32(s.transmute_i32s_u32s(e), s).gt(bits.splat_same(149));
+        let mag = big.select_i32(left, right);
+        let tiny = PI32(s.transmute_i32s_u32s(e), s).lt(bits.splat_same(127)); // |x| < 1
+        let mag = tiny.select_i32(bits.splat_same(0), mag);
+        // sign: (mag ^ sgn) - sgn with sgn all ones for negative x
+        let sgn = bits.splat_same(0) - bits.shr_logical(31);
+        let v = (mag ^ sgn) - sgn;
+        // |x| >= 2^31 (e >= 158), inf and NaN: "integer indefinite"
+        let out = PI32(s.transmute_i32s_u32s(e), s).gt(bits.splat_same(157));
+        out.select_i32(bits.splat_same(i32::MIN), v)
     }
     #[inline(always)]
-    fn mul_add(self, b: F32x8, c: F32x8) -> F32x8 {
-        F32x8(unsafe { _mm256_fmadd_ps(self.0, b.0, c.0) })
-    }
-    #[inline(always)]
-    fn to_i32(self) -> I32x8 {
-        I32x8(unsafe { _mm256_cvttps_epi32(self.0) })
-    }
-    #[inline(always)]
-    fn to_bits(self) -> I32x8 {
-        I32x8(unsafe { _mm256_castps_si256(self.0) })
+    fn to_bits(self) -> PI32<S> {
+        PI32(self.1.transmute_i32s_f32s(self.0), self.1)
     }
     #[inline(always)]
     fn store(self, out: &mut [f32]) {
-        let out = &mut out[..8];
-        unsafe { _mm256_storeu_ps(out.as_mut_ptr(), self.0) }
+        let (v, _) = S::as_mut_simd_f32s(&mut out[..S::F32_LANES]);
+        v[0] = self.0;
     }
     #[inline(always)]
-    fn store_masked(self, m: M32x8, out: &mut [f32]) {
-        let out = &mut out[..8];
-        unsafe { _mm256_maskstore_ps(out.as_mut_ptr(), _mm256_castps_si256(m.0), self.0) }
+    fn store_masked(self, m: PM32<S>, out: &mut [f32]) {
+        let (v, _) = S::as_mut_simd_f32s(&mut out[..S::F32_LANES]);
+        v[0] = self.1.select_f32s(m.0, self.0, v[0]);
     }
     #[inline(always)]
     fn lane(self, i: usize) -> f32 {
+        assert!(i < S::F32_LANES, "lane {i} of {}", S::F32_LANES);
         self.to_array()[i]
     }
     #[inline(always)]
     fn reduce_min(self) -> f32 {
         let a = self.to_array();
-        a[1..].iter().fold(a[0], |m, &x| if m < x { m } else { x })
+        let mut m = a[0];
+        for &x in &a[1..S::F32_LANES] {
+            m = if m < x { m } else { x };
+        }
+        m
     }
     #[inline(always)]
     fn reduce_max(self) -> f32 {
         let a = self.to_array();
-        a[1..].iter().fold(a[0], |m, &x| if m > x { m } else { x })
+        let mut m = a[0];
+        for &x in &a[1..S::F32_LANES] {
+            m = if m > x { m } else { x };
+        }
+        m
     }
 }
 
-impl SimdMask for M32x8 {
-    type F32s = F32x8;
-    type I32s = I32x8;
+impl<S: Simd> SimdMask for PM32<S> {
+    type F32s = PF32<S>;
+    type I32s = PI32<S>;
 
     #[inline(always)]
-    fn select(self, t: F32x8, f: F32x8) -> F32x8 {
-        F32x8(unsafe { _mm256_blendv_ps(f.0, t.0, self.0) })
+    fn select(self, t: PF32<S>, f: PF32<S>) -> PF32<S> {
+        PF32(self.1.select_f32s(self.0, t.0, f.0), self.1)
     }
     #[inline(always)]
-    fn select_i32(self, t: I32x8, f: I32x8) -> I32x8 {
-        unsafe {
-            I32x8(_mm256_castps_si256(_mm256_blendv_ps(
-                _mm256_castsi256_ps(f.0),
-                _mm256_castsi256_ps(t.0),
-                self.0,
-            )))
-        }
+    fn select_i32(self, t: PI32<S>, f: PI32<S>) -> PI32<S> {
+        PI32(self.1.select_i32s(self.0, t.0, f.0), self.1)
     }
     #[inline(always)]
     fn any(self) -> bool {
-        unsafe { _mm256_movemask_ps(self.0) != 0 }
+        self.sum_of(self.1.splat_f32s(1.0)) != 0.0
     }
     #[inline(always)]
     fn all(self) -> bool {
-        unsafe { _mm256_movemask_ps(self.0) == 0xff }
+        self.sum_of(self.1.splat_f32s(1.0)) == S::F32_LANES as f32
     }
     #[inline(always)]
     fn none(self) -> bool {
-        unsafe { _mm256_movemask_ps(self.0) == 0 }
+        !self.any()
     }
     #[inline(always)]
     fn bitmask(self) -> u32 {
-        unsafe { _mm256_movemask_ps(self.0) as u32 }
+        let (w, _) = S::as_simd_u32s(&LANE_POW2[..S::F32_LANES]);
+        self.sum_of(self.1.transmute_f32s_u32s(w[0])) as u32
     }
     #[inline(always)]
-    fn and_not(self, o: M32x8) -> M32x8 {
-        M32x8(unsafe { _mm256_andnot_ps(o.0, self.0) })
+    fn and_not(self, o: Self) -> Self {
+        self & !o
     }
 }
 
-macro_rules! m8_ops {
-    ($($tr:ident $f:ident $atr:ident $af:ident $intr:ident),*) => {$(
-        impl $tr for M32x8 {
-            type Output = M32x8;
+macro_rules! mask_ops {
+    ($($tr:ident $f:ident $op:ident),*) => {$(
+        impl<S: Simd> $tr for PM32<S> {
+            type Output = PM32<S>;
             #[inline(always)]
-            fn $f(self, o: M32x8) -> M32x8 {
-                M32x8(unsafe { $intr(self.0, o.0) })
-            }
-        }
-        impl $atr for M32x8 {
-            #[inline(always)]
-            fn $af(&mut self, o: M32x8) {
-                self.0 = unsafe { $intr(self.0, o.0) };
+            fn $f(self, o: PM32<S>) -> PM32<S> {
+                PM32(self.1.$op(self.0, o.0), self.1)
             }
         }
     )*};
 }
-m8_ops!(BitAnd bitand BitAndAssign bitand_assign _mm256_and_ps,
-    BitOr bitor BitOrAssign bitor_assign _mm256_or_ps);
-impl BitXor for M32x8 {
-    type Output = M32x8;
+mask_ops!(BitAnd bitand and_m32s, BitOr bitor or_m32s, BitXor bitxor xor_m32s);
+impl<S: Simd> Not for PM32<S> {
+    type Output = PM32<S>;
     #[inline(always)]
-    fn bitxor(self, o: M32x8) -> M32x8 {
-        M32x8(unsafe { _mm256_xor_ps(self.0, o.0) })
+    fn not(self) -> PM32<S> {
+        PM32(self.1.not_m32s(self.0), self.1)
     }
 }
-impl Not for M32x8 {
-    type Output = M32x8;
+impl<S: Simd> BitAndAssign for PM32<S> {
     #[inline(always)]
-    fn not(self) -> M32x8 {
-        M32x8(unsafe { _mm256_xor_ps(self.0, _mm256_castsi256_ps(_mm256_set1_epi32(-1))) })
+    fn bitand_assign(&mut self, o: PM32<S>) {
+        *self = *self & o;
+    }
+}
+impl<S: Simd> BitOrAssign for PM32<S> {
+    #[inline(always)]
+    fn bitor_assign(&mut self, o: PM32<S>) {
+        *self = *self | o;
     }
 }
 
-macro_rules! i32x8_ops {
-    ($($tr:ident $f:ident $intr:ident),*) => {$(
-        impl $tr for I32x8 {
-            type Output = I32x8;
+macro_rules! i32_ops {
+    ($($tr:ident $f:ident $op:ident),*) => {$(
+        impl<S: Simd> $tr for PI32<S> {
+            type Output = PI32<S>;
             #[inline(always)]
-            fn $f(self, o: I32x8) -> I32x8 {
-                I32x8(unsafe { $intr(self.0, o.0) })
+            fn $f(self, o: PI32<S>) -> PI32<S> {
+                PI32(self.1.$op(self.0, o.0), self.1)
             }
         }
     )*};
 }
-i32x8_ops!(Add add _mm256_add_epi32, Sub sub _mm256_sub_epi32, Mul mul _mm256_mullo_epi32,
-    BitAnd bitand _mm256_and_si256, BitOr bitor _mm256_or_si256, BitXor bitxor _mm256_xor_si256);
-impl Not for I32x8 {
-    type Output = I32x8;
+i32_ops!(Add add add_i32s, Sub sub sub_i32s, Mul mul mul_i32s,
+    BitAnd bitand and_i32s, BitOr bitor or_i32s, BitXor bitxor xor_i32s);
+impl<S: Simd> Not for PI32<S> {
+    type Output = PI32<S>;
     #[inline(always)]
-    fn not(self) -> I32x8 {
-        I32x8(unsafe { _mm256_xor_si256(self.0, _mm256_set1_epi32(-1)) })
+    fn not(self) -> PI32<S> {
+        PI32(self.1.not_i32s(self.0), self.1)
     }
 }
-impl Shl<u32> for I32x8 {
-    type Output = I32x8;
+impl<S: Simd> Shl<u32> for PI32<S> {
+    type Output = PI32<S>;
     #[inline(always)]
-    fn shl(self, n: u32) -> I32x8 {
-        I32x8(unsafe { _mm256_sll_epi32(self.0, _mm_cvtsi32_si128(n as i32)) })
+    fn shl(self, n: u32) -> PI32<S> {
+        let s = self.1;
+        PI32::from_u(s, s.wrapping_dyn_shl_u32s(self.u(), s.splat_u32s(n)))
     }
 }
-impl Shr<u32> for I32x8 {
-    type Output = I32x8;
+impl<S: Simd> Shr<u32> for PI32<S> {
+    type Output = PI32<S>;
+    /// Arithmetic: `((x ^ sign) >> n) ^ sign` with logical shifts (pulp has no `sra`).
     #[inline(always)]
-    fn shr(self, n: u32) -> I32x8 {
-        I32x8(unsafe { _mm256_sra_epi32(self.0, _mm_cvtsi32_si128(n as i32)) })
+    fn shr(self, n: u32) -> PI32<S> {
+        let sgn = self.splat_same(0) - self.shr_logical(31);
+        ((self ^ sgn).shr_logical(n)) ^ sgn
     }
 }
 
-impl SimdI32 for I32x8 {
-    type Mask = M32x8;
-    type F32s = F32x8;
+impl<S: Simd> SimdI32 for PI32<S> {
+    type Mask = PM32<S>;
+    type F32s = PF32<S>;
 
     #[inline(always)]
-    fn splat_same(self, x: i32) -> I32x8 {
-        I32x8(unsafe { _mm256_set1_epi32(x) })
+    fn splat_same(self, x: i32) -> Self {
+        PI32(self.1.splat_i32s(x), self.1)
     }
     #[inline(always)]
-    fn eq(self, o: I32x8) -> M32x8 {
-        M32x8(unsafe { _mm256_castsi256_ps(_mm256_cmpeq_epi32(self.0, o.0)) })
+    fn eq(self, o: Self) -> PM32<S> {
+        PM32(self.1.equal_i32s(self.0, o.0), self.1)
     }
     #[inline(always)]
-    fn lt(self, o: I32x8) -> M32x8 {
-        M32x8(unsafe { _mm256_castsi256_ps(_mm256_cmpgt_epi32(o.0, self.0)) })
+    fn lt(self, o: Self) -> PM32<S> {
+        PM32(self.1.less_than_i32s(self.0, o.0), self.1)
     }
     #[inline(always)]
-    fn gt(self, o: I32x8) -> M32x8 {
-        M32x8(unsafe { _mm256_castsi256_ps(_mm256_cmpgt_epi32(self.0, o.0)) })
+    fn gt(self, o: Self) -> PM32<S> {
+        PM32(self.1.greater_than_i32s(self.0, o.0), self.1)
     }
     #[inline(always)]
-    fn min(self, o: I32x8) -> I32x8 {
-        I32x8(unsafe { _mm256_min_epi32(self.0, o.0) })
+    fn min(self, o: Self) -> Self {
+        PI32(self.1.min_i32s(self.0, o.0), self.1)
     }
     #[inline(always)]
-    fn max(self, o: I32x8) -> I32x8 {
-        I32x8(unsafe { _mm256_max_epi32(self.0, o.0) })
+    fn max(self, o: Self) -> Self {
+        PI32(self.1.max_i32s(self.0, o.0), self.1)
+    }
+    /// The high and low 16 bits each convert exactly through the 2^23 exponent trick; their
+    /// sum `hi * 65536 + lo` is the one rounding (to nearest even).
+    #[inline(always)]
+    fn to_f32(self) -> PF32<S> {
+        let s = self.1;
+        let magic = self.splat_same(0x4b00_0000); // 2^23 as f32 bits
+        let lo = (self & self.splat_same(0xffff)) | magic;
+        let lo = s.sub_f32s(lo.bits_to_f32().0, s.splat_f32s(TWO23));
+        // hi = x >> 16 (arithmetic), offset by 2^15 to be non-negative
+        let hi = ((self >> 16) + self.splat_same(0x8000)) | magic;
+        let hi = s.sub_f32s(hi.bits_to_f32().0, s.splat_f32s(TWO23 + 32768.0));
+        PF32(s.add_f32s(s.mul_f32s(hi, s.splat_f32s(65536.0)), lo), s)
     }
     #[inline(always)]
-    fn to_f32(self) -> F32x8 {
-        F32x8(unsafe { _mm256_cvtepi32_ps(self.0) })
+    fn bits_to_f32(self) -> PF32<S> {
+        PF32(self.1.transmute_f32s_i32s(self.0), self.1)
     }
     #[inline(always)]
-    fn bits_to_f32(self) -> F32x8 {
-        F32x8(unsafe { _mm256_castsi256_ps(self.0) })
-    }
-    #[inline(always)]
-    fn shr_logical(self, n: u32) -> I32x8 {
-        I32x8(unsafe { _mm256_srl_epi32(self.0, _mm_cvtsi32_si128(n as i32)) })
+    fn shr_logical(self, n: u32) -> Self {
+        self.shr_dyn(self.1.splat_u32s(n))
     }
     #[inline(always)]
     fn store(self, out: &mut [i32]) {
-        let out = &mut out[..8];
-        unsafe { _mm256_storeu_si256(out.as_mut_ptr().cast(), self.0) }
+        let (v, _) = S::as_mut_simd_i32s(&mut out[..S::I32_LANES]);
+        v[0] = self.0;
     }
     #[inline(always)]
     fn lane(self, i: usize) -> i32 {
-        self.to_array()[i]
-    }
-}
-
-// ---------------------------------------------------------------- pulp16: AVX-512, 16 lanes
-
-/// Sixteen `f32` lanes (AVX-512F).
-#[derive(Clone, Copy)]
-#[repr(transparent)]
-pub struct F32x16(__m512);
-/// Sixteen `i32` lanes (AVX-512F).
-#[derive(Clone, Copy)]
-#[repr(transparent)]
-pub struct I32x16(__m512i);
-/// Sixteen mask lanes in an AVX-512 mask register.
-#[derive(Clone, Copy)]
-#[repr(transparent)]
-pub struct M16(__mmask16);
-
-impl F32x16 {
-    /// The lanes as an array.
-    #[inline(always)]
-    pub fn to_array(self) -> [f32; 16] {
-        let mut a = [0.0; 16];
-        self.store(&mut a);
-        a
-    }
-    #[inline(always)]
-    fn has_fraction(self) -> __mmask16 {
-        unsafe {
-            _mm512_cmp_ps_mask::<_CMP_LT_OQ>(_mm512_abs_ps(self.0), _mm512_set1_ps(8388608.0))
-        }
-    }
-}
-impl I32x16 {
-    /// The lanes as an array.
-    #[inline(always)]
-    pub fn to_array(self) -> [i32; 16] {
-        let mut a = [0; 16];
-        self.store(&mut a);
-        a
-    }
-}
-impl fmt::Debug for F32x16 {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "F32x16{:?}", self.to_array())
-    }
-}
-impl fmt::Debug for I32x16 {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "I32x16{:?}", self.to_array())
-    }
-}
-impl fmt::Debug for M16 {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "M16({:016b})", self.0)
-    }
-}
-
-impl Lanes for Pulp16 {
-    const N: usize = 16;
-    type F32s = F32x16;
-    type I32s = I32x16;
-    type Mask = M16;
-
-    #[inline(always)]
-    fn splat(self, x: f32) -> F32x16 {
-        F32x16(unsafe { _mm512_set1_ps(x) })
-    }
-    #[inline(always)]
-    fn splat_i32(self, x: i32) -> I32x16 {
-        I32x16(unsafe { _mm512_set1_epi32(x) })
-    }
-    #[inline(always)]
-    fn splat_mask(self, b: bool) -> M16 {
-        M16(if b { 0xffff } else { 0 })
-    }
-    #[inline(always)]
-    fn lane_ids(self) -> I32x16 {
-        I32x16(unsafe { _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15) })
-    }
-    #[inline(always)]
-    fn load(self, s: &[f32]) -> F32x16 {
-        let s = &s[..16];
-        F32x16(unsafe { _mm512_loadu_ps(s.as_ptr()) })
-    }
-    #[inline(always)]
-    fn load_i32(self, s: &[i32]) -> I32x16 {
-        let s = &s[..16];
-        I32x16(unsafe { _mm512_loadu_si512(s.as_ptr().cast()) })
-    }
-    #[inline(always)]
-    fn mask_from_bits(self, bits: u32) -> M16 {
-        M16(bits as u16)
-    }
-    #[inline(always)]
-    fn gather(self, table: &[f32], idx: I32x16) -> F32x16 {
-        let ok = in_range16(idx, table.len());
-        if !ok {
-            gather_check(ok, &idx.to_array(), table.len());
-        }
-        // SAFETY: every index was checked to lie in `0..table.len()`.
-        F32x16(unsafe { _mm512_i32gather_ps::<4>(idx.0, table.as_ptr()) })
-    }
-    #[inline(always)]
-    fn gather_u32(self, table: &[u32], idx: I32x16) -> I32x16 {
-        let ok = in_range16(idx, table.len());
-        if !ok {
-            gather_check(ok, &idx.to_array(), table.len());
-        }
-        // SAFETY: every index was checked to lie in `0..table.len()`.
-        I32x16(unsafe { _mm512_i32gather_epi32::<4>(idx.0, table.as_ptr().cast()) })
-    }
-    #[inline(always)]
-    fn gather2(self, table: &[f32], idx: I32x16) -> (F32x16, F32x16) {
-        let n = table.len().saturating_sub(1);
-        let ok = in_range16(idx, n);
-        if !ok {
-            gather_check(ok, &idx.to_array(), n);
-        }
-        // SAFETY: every `idx + 1` was checked to lie inside `table`; each 64-bit element is
-        // the pair (table[i], table[i + 1]), read unaligned at 4-byte scale.
-        unsafe {
-            let base = table.as_ptr() as *const i64;
-            let q0 = _mm512_castsi512_ps(_mm512_i32gather_epi64::<4>(
-                _mm512_castsi512_si256(idx.0),
-                base,
-            ));
-            let q1 = _mm512_castsi512_ps(_mm512_i32gather_epi64::<4>(
-                _mm512_extracti64x4_epi64::<1>(idx.0),
-                base,
-            ));
-            let evens =
-                _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
-            let odds = _mm512_setr_epi32(1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31);
-            (
-                F32x16(_mm512_permutex2var_ps(q0, evens, q1)),
-                F32x16(_mm512_permutex2var_ps(q0, odds, q1)),
-            )
-        }
-    }
-}
-
-#[inline(always)]
-fn in_range16(idx: I32x16, len: usize) -> bool {
-    let len = len.min(i32::MAX as usize) as u32;
-    // Unsigned compare: negative indices become huge.
-    unsafe { _mm512_cmplt_epu32_mask(idx.0, _mm512_set1_epi32(len as i32)) == 0xffff }
-}
-
-macro_rules! f32x16_ops {
-    ($($tr:ident $f:ident $atr:ident $af:ident $intr:ident),*) => {$(
-        impl $tr for F32x16 {
-            type Output = F32x16;
-            #[inline(always)]
-            fn $f(self, o: F32x16) -> F32x16 {
-                F32x16(unsafe { $intr(self.0, o.0) })
-            }
-        }
-        impl $tr<f32> for F32x16 {
-            type Output = F32x16;
-            #[inline(always)]
-            fn $f(self, o: f32) -> F32x16 {
-                F32x16(unsafe { $intr(self.0, _mm512_set1_ps(o)) })
-            }
-        }
-        impl $atr for F32x16 {
-            #[inline(always)]
-            fn $af(&mut self, o: F32x16) {
-                self.0 = unsafe { $intr(self.0, o.0) };
-            }
-        }
-    )*};
-}
-f32x16_ops!(
-    Add add AddAssign add_assign _mm512_add_ps,
-    Sub sub SubAssign sub_assign _mm512_sub_ps,
-    Mul mul MulAssign mul_assign _mm512_mul_ps,
-    Div div DivAssign div_assign _mm512_div_ps
-);
-impl Neg for F32x16 {
-    type Output = F32x16;
-    #[inline(always)]
-    fn neg(self) -> F32x16 {
-        unsafe {
-            F32x16(_mm512_castsi512_ps(_mm512_xor_si512(
-                _mm512_castps_si512(self.0),
-                _mm512_set1_epi32(i32::MIN),
-            )))
-        }
-    }
-}
-
-macro_rules! cmp16 {
-    ($a:expr, $b:expr, $imm:ident) => {
-        M16(unsafe { _mm512_cmp_ps_mask::<$imm>($a, $b) })
-    };
-}
-
-impl SimdF32 for F32x16 {
-    type Mask = M16;
-    type I32s = I32x16;
-
-    #[inline(always)]
-    fn lt(self, o: F32x16) -> M16 {
-        cmp16!(self.0, o.0, _CMP_LT_OQ)
-    }
-    #[inline(always)]
-    fn le(self, o: F32x16) -> M16 {
-        cmp16!(self.0, o.0, _CMP_LE_OQ)
-    }
-    #[inline(always)]
-    fn gt(self, o: F32x16) -> M16 {
-        cmp16!(self.0, o.0, _CMP_GT_OQ)
-    }
-    #[inline(always)]
-    fn ge(self, o: F32x16) -> M16 {
-        cmp16!(self.0, o.0, _CMP_GE_OQ)
-    }
-    #[inline(always)]
-    fn eq(self, o: F32x16) -> M16 {
-        cmp16!(self.0, o.0, _CMP_EQ_OQ)
-    }
-    #[inline(always)]
-    fn ne(self, o: F32x16) -> M16 {
-        cmp16!(self.0, o.0, _CMP_NEQ_UQ)
-    }
-    #[inline(always)]
-    fn min(self, o: F32x16) -> F32x16 {
-        F32x16(unsafe { _mm512_min_ps(self.0, o.0) })
-    }
-    #[inline(always)]
-    fn max(self, o: F32x16) -> F32x16 {
-        F32x16(unsafe { _mm512_max_ps(self.0, o.0) })
-    }
-    #[inline(always)]
-    fn abs(self) -> F32x16 {
-        F32x16(unsafe { _mm512_abs_ps(self.0) })
-    }
-    #[inline(always)]
-    fn sqrt(self) -> F32x16 {
-        F32x16(unsafe { _mm512_sqrt_ps(self.0) })
-    }
-    #[inline(always)]
-    fn rsqrt(self) -> F32x16 {
-        F32x16(unsafe { _mm512_rsqrt14_ps(self.0) })
-    }
-    #[inline(always)]
-    fn recip(self) -> F32x16 {
-        F32x16(unsafe { _mm512_rcp14_ps(self.0) })
-    }
-    #[inline(always)]
-    fn floor(self) -> F32x16 {
-        unsafe {
-            let r = _mm512_roundscale_ps::<{ _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC }>(self.0);
-            F32x16(_mm512_mask_blend_ps(self.has_fraction(), self.0, r))
-        }
-    }
-    #[inline(always)]
-    fn round(self) -> F32x16 {
-        unsafe {
-            let r =
-                _mm512_roundscale_ps::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(self.0);
-            F32x16(_mm512_mask_blend_ps(self.has_fraction(), self.0, r))
-        }
-    }
-    #[inline(always)]
-    fn mul_add(self, b: F32x16, c: F32x16) -> F32x16 {
-        F32x16(unsafe { _mm512_fmadd_ps(self.0, b.0, c.0) })
-    }
-    #[inline(always)]
-    fn to_i32(self) -> I32x16 {
-        I32x16(unsafe { _mm512_cvttps_epi32(self.0) })
-    }
-    #[inline(always)]
-    fn to_bits(self) -> I32x16 {
-        I32x16(unsafe { _mm512_castps_si512(self.0) })
-    }
-    #[inline(always)]
-    fn store(self, out: &mut [f32]) {
-        let out = &mut out[..16];
-        unsafe { _mm512_storeu_ps(out.as_mut_ptr(), self.0) }
-    }
-    #[inline(always)]
-    fn store_masked(self, m: M16, out: &mut [f32]) {
-        let out = &mut out[..16];
-        unsafe { _mm512_mask_storeu_ps(out.as_mut_ptr(), m.0, self.0) }
-    }
-    #[inline(always)]
-    fn lane(self, i: usize) -> f32 {
-        self.to_array()[i]
-    }
-    #[inline(always)]
-    fn reduce_min(self) -> f32 {
-        let a = self.to_array();
-        a[1..].iter().fold(a[0], |m, &x| if m < x { m } else { x })
-    }
-    #[inline(always)]
-    fn reduce_max(self) -> f32 {
-        let a = self.to_array();
-        a[1..].iter().fold(a[0], |m, &x| if m > x { m } else { x })
-    }
-}
-
-impl SimdMask for M16 {
-    type F32s = F32x16;
-    type I32s = I32x16;
-
-    #[inline(always)]
-    fn select(self, t: F32x16, f: F32x16) -> F32x16 {
-        F32x16(unsafe { _mm512_mask_blend_ps(self.0, f.0, t.0) })
-    }
-    #[inline(always)]
-    fn select_i32(self, t: I32x16, f: I32x16) -> I32x16 {
-        I32x16(unsafe { _mm512_mask_blend_epi32(self.0, f.0, t.0) })
-    }
-    #[inline(always)]
-    fn any(self) -> bool {
-        self.0 != 0
-    }
-    #[inline(always)]
-    fn all(self) -> bool {
-        self.0 == 0xffff
-    }
-    #[inline(always)]
-    fn none(self) -> bool {
-        self.0 == 0
-    }
-    #[inline(always)]
-    fn bitmask(self) -> u32 {
-        self.0 as u32
-    }
-    #[inline(always)]
-    fn and_not(self, o: M16) -> M16 {
-        M16(self.0 & !o.0)
-    }
-}
-impl BitAnd for M16 {
-    type Output = M16;
-    #[inline(always)]
-    fn bitand(self, o: M16) -> M16 {
-        M16(self.0 & o.0)
-    }
-}
-impl BitOr for M16 {
-    type Output = M16;
-    #[inline(always)]
-    fn bitor(self, o: M16) -> M16 {
-        M16(self.0 | o.0)
-    }
-}
-impl BitXor for M16 {
-    type Output = M16;
-    #[inline(always)]
-    fn bitxor(self, o: M16) -> M16 {
-        M16(self.0 ^ o.0)
-    }
-}
-impl Not for M16 {
-    type Output = M16;
-    #[inline(always)]
-    fn not(self) -> M16 {
-        M16(!self.0)
-    }
-}
-impl BitAndAssign for M16 {
-    #[inline(always)]
-    fn bitand_assign(&mut self, o: M16) {
-        self.0 &= o.0;
-    }
-}
-impl BitOrAssign for M16 {
-    #[inline(always)]
-    fn bitor_assign(&mut self, o: M16) {
-        self.0 |= o.0;
-    }
-}
-
-macro_rules! i32x16_ops {
-    ($($tr:ident $f:ident $intr:ident),*) => {$(
-        impl $tr for I32x16 {
-            type Output = I32x16;
-            #[inline(always)]
-            fn $f(self, o: I32x16) -> I32x16 {
-                I32x16(unsafe { $intr(self.0, o.0) })
-            }
-        }
-    )*};
-}
-i32x16_ops!(Add add _mm512_add_epi32, Sub sub _mm512_sub_epi32, Mul mul _mm512_mullo_epi32,
-    BitAnd bitand _mm512_and_si512, BitOr bitor _mm512_or_si512, BitXor bitxor _mm512_xor_si512);
-impl Not for I32x16 {
-    type Output = I32x16;
-    #[inline(always)]
-    fn not(self) -> I32x16 {
-        I32x16(unsafe { _mm512_xor_si512(self.0, _mm512_set1_epi32(-1)) })
-    }
-}
-impl Shl<u32> for I32x16 {
-    type Output = I32x16;
-    #[inline(always)]
-    fn shl(self, n: u32) -> I32x16 {
-        I32x16(unsafe { _mm512_sll_epi32(self.0, _mm_cvtsi32_si128(n as i32)) })
-    }
-}
-impl Shr<u32> for I32x16 {
-    type Output = I32x16;
-    #[inline(always)]
-    fn shr(self, n: u32) -> I32x16 {
-        I32x16(unsafe { _mm512_sra_epi32(self.0, _mm_cvtsi32_si128(n as i32)) })
-    }
-}
-
-impl SimdI32 for I32x16 {
-    type Mask = M16;
-    type F32s = F32x16;
-
-    #[inline(always)]
-    fn splat_same(self, x: i32) -> I32x16 {
-        I32x16(unsafe { _mm512_set1_epi32(x) })
-    }
-    #[inline(always)]
-    fn eq(self, o: I32x16) -> M16 {
-        M16(unsafe { _mm512_cmpeq_epi32_mask(self.0, o.0) })
-    }
-    #[inline(always)]
-    fn lt(self, o: I32x16) -> M16 {
-        M16(unsafe { _mm512_cmplt_epi32_mask(self.0, o.0) })
-    }
-    #[inline(always)]
-    fn gt(self, o: I32x16) -> M16 {
-        M16(unsafe { _mm512_cmpgt_epi32_mask(self.0, o.0) })
-    }
-    #[inline(always)]
-    fn min(self, o: I32x16) -> I32x16 {
-        I32x16(unsafe { _mm512_min_epi32(self.0, o.0) })
-    }
-    #[inline(always)]
-    fn max(self, o: I32x16) -> I32x16 {
-        I32x16(unsafe { _mm512_max_epi32(self.0, o.0) })
-    }
-    #[inline(always)]
-    fn to_f32(self) -> F32x16 {
-        F32x16(unsafe { _mm512_cvtepi32_ps(self.0) })
-    }
-    #[inline(always)]
-    fn bits_to_f32(self) -> F32x16 {
-        F32x16(unsafe { _mm512_castsi512_ps(self.0) })
-    }
-    #[inline(always)]
-    fn shr_logical(self, n: u32) -> I32x16 {
-        I32x16(unsafe { _mm512_srl_epi32(self.0, _mm_cvtsi32_si128(n as i32)) })
-    }
-    #[inline(always)]
-    fn store(self, out: &mut [i32]) {
-        let out = &mut out[..16];
-        unsafe { _mm512_storeu_si512(out.as_mut_ptr().cast(), self.0) }
-    }
-    #[inline(always)]
-    fn lane(self, i: usize) -> i32 {
+        assert!(i < S::I32_LANES, "lane {i} of {}", S::I32_LANES);
         self.to_array()[i]
     }
 }

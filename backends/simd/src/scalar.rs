@@ -143,18 +143,26 @@ impl SimdF32 for f32 {
     }
     #[inline(always)]
     fn floor(self) -> f32 {
+        // Inline, never a libm `floorf` call (which a build without SSE4.1 would make while
+        // the SIMD backends inline theirs): truncate through i32 (`cvttss2si`; |x| < 2^23
+        // here), step down where that went up, keep the sign of zero.
         if integral_or_special(self) {
             self
         } else {
-            f32::floor(self)
+            let t = (self as i32) as f32;
+            let r = if t > self { t - 1.0 } else { t };
+            r.copysign(self)
         }
     }
     #[inline(always)]
     fn round(self) -> f32 {
+        // Inline, never a libm call: |x| + 2^23 - 2^23 rounds |x| < 2^23 to nearest even
+        // (the add-magic-number trick, scalar); the sign is copied back (keeps -0).
         if integral_or_special(self) {
             self
         } else {
-            f32::round_ties_even(self)
+            let r = (self.abs() + 8_388_608.0) - 8_388_608.0;
+            r.copysign(self)
         }
     }
     #[inline(always)]
