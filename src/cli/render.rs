@@ -85,8 +85,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             .map(|n| n.get())
             .unwrap_or(1)
     });
+    // Unoptimised (debug) builds keep every packet temporary of the inlined pipeline on the
+    // stack: 16-lane packets overflowed rayon's default 2 MiB on the built-in `cornell` (and
+    // ran with 64 MiB). The stack is reserved, not committed, so the margin costs nothing.
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
+        .stack_size(64 << 20)
         .build()
         .context("starting the worker threads")?;
 

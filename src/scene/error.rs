@@ -65,11 +65,11 @@ pub enum SceneError {
         /// The scene file.
         path: PathBuf,
         line: usize,
-        field: String,
+        field: Box<str>,
         /// The asset as found (the scene file's folder joined with the path it gives).
         asset: PathBuf,
         /// "is missing" or "cannot be read: ...".
-        problem: String,
+        problem: Box<str>,
         /// The `scripts/native.py` step that fetches it, when the scene file names one.
         step: Option<String>,
         /// Fetched only when asked for by name (a large download the tests never make).

@@ -350,9 +350,9 @@ impl Source<'_> {
         SceneError::Asset {
             path: self.path.to_path_buf(),
             line: self.line_col(span.start).0,
-            field: field.to_string(),
+            field: field.into(),
             asset,
-            problem,
+            problem: problem.into(),
             step,
             on_demand,
             missing,
