@@ -71,6 +71,12 @@ impl Ctx {
         plot::bar_chart(&self.out, stem, chart)
     }
 
+    /// Writes a stacked bar chart (series stacked per category) as `plots/{stem}.png` and
+    /// `.svg`.
+    pub fn stacked_bar_chart(&self, stem: &str, chart: &BarChart) -> anyhow::Result<PlotFiles> {
+        plot::stacked_bar_chart(&self.out, stem, chart)
+    }
+
     /// Markdown showing `plots/{stem}.png` with a link to the SVG, if the PNG exists (it
     /// starts with a blank line, so it may follow a table).
     pub fn plot_markdown(&self, stem: &str, alt: &str) -> Option<String> {

@@ -9,6 +9,7 @@
 pub mod cli;
 pub mod ctx;
 pub mod experiment;
+pub mod frames;
 pub mod plot;
 pub mod readme;
 pub mod table;
@@ -26,7 +27,9 @@ pub mod accel;
 pub mod kernels;
 pub mod table1;
 pub mod table2;
+pub mod table3;
 pub mod table4;
+pub mod table5;
 
 /// Every experiment, in the order `reproduce` runs them and the README lists them. The
 /// names are the results contract (`--only` takes them).
@@ -35,20 +38,8 @@ pub const EXPERIMENTS: &[Experiment] = &[
     accel::EXPERIMENT,
     table1::EXPERIMENT,
     table2::EXPERIMENT,
-    Experiment::planned(
-        "table3",
-        "rendering the test scenes per backend and accel",
-        "Table 3 (section 7)",
-        &["table3_scenes.csv"],
-        None,
-    ),
+    table3::EXPERIMENT,
     table4::EXPERIMENT,
-    Experiment::planned(
-        "table5",
-        "rendering with 1, 2, ... threads",
-        "Table 5 (section 7)",
-        &["table5_threads.csv"],
-        None,
-    ),
+    table5::EXPERIMENT,
     aa::EXPERIMENT,
 ];

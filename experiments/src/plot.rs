@@ -1,5 +1,5 @@
 //! Plots of the results (paper section 7's tables drawn as charts): a line chart of y against
-//! x per series and a grouped bar chart, each written as PNG and SVG under `DIR/plots/`.
+//! x per series, a grouped bar chart and a stacked one (shares of a whole), each written as PNG and SVG under `DIR/plots/`.
 //!
 //! Text is drawn with a font embedded in the binary (Ubuntu Light from `epaint_default_fonts`)
 //! through plotters' pure-Rust `ab_glyph` route, so plotting needs no system font libraries.
@@ -155,6 +155,35 @@ pub fn bar_chart(out: &Path, stem: &str, chart: &BarChart) -> anyhow::Result<Plo
     write_both(out, stem, chart)
 }
 
+/// Writes `chart` with its series stacked in each category (e.g. the shares of frame time
+/// per stage) as `out/plots/{stem}.png` and `.svg`.
+pub fn stacked_bar_chart(out: &Path, stem: &str, chart: &BarChart) -> anyhow::Result<PlotFiles> {
+    if chart.categories.is_empty() || chart.series.is_empty() {
+        return Err(anyhow!("plot {stem}: no categories or no series"));
+    }
+    if let Some((name, values)) = chart
+        .series
+        .iter()
+        .find(|(_, v)| v.len() != chart.categories.len())
+    {
+        return Err(anyhow!(
+            "plot {stem}: series {name} has {} values for {} categories",
+            values.len(),
+            chart.categories.len()
+        ));
+    }
+    write_both(out, stem, &Stacked(chart))
+}
+
+/// A bar chart drawn stacked.
+struct Stacked<'a>(&'a BarChart);
+
+impl Draw for Stacked<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> anyhow::Result<()> {
+        draw_bars(root, self.0, true)
+    }
+}
+
 /// A chart that can draw itself on any plotters backend.
 trait Draw {
     fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> anyhow::Result<()>;
@@ -181,7 +210,7 @@ impl Draw for Lines<'_> {
 
 impl Draw for BarChart {
     fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> anyhow::Result<()> {
-        draw_bars(root, self)
+        draw_bars(root, self, false)
     }
 }
 
@@ -283,15 +312,23 @@ where
 fn draw_bars<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     chart: &BarChart,
+    stacked: bool,
 ) -> anyhow::Result<()> {
     root.fill(&WHITE).map_err(err)?;
     let n = chart.categories.len();
-    let y_max = chart
-        .series
-        .iter()
-        .flat_map(|(_, v)| v.iter().copied())
-        .filter(|v| v.is_finite())
-        .fold(0.0f64, f64::max);
+    let finite = |v: f64| if v.is_finite() { v.max(0.0) } else { 0.0 };
+    let y_max = if stacked {
+        (0..n)
+            .map(|i| chart.series.iter().map(|(_, v)| finite(v[i])).sum())
+            .fold(0.0f64, f64::max)
+    } else {
+        chart
+            .series
+            .iter()
+            .flat_map(|(_, v)| v.iter().copied())
+            .filter(|v| v.is_finite())
+            .fold(0.0f64, f64::max)
+    };
     let y_max = if y_max > 0.0 { y_max * 1.15 } else { 1.0 };
     let mut ctx = ChartBuilder::on(&root)
         .caption(&chart.title, (FONT, 24))
@@ -320,18 +357,32 @@ fn draw_bars<DB: DrawingBackend>(
         .max_light_lines(2)
         .draw()
         .map_err(err)?;
-    let groups = chart.series.len() as f64;
+    let groups = if stacked {
+        1.0
+    } else {
+        chart.series.len() as f64
+    };
     let width = 0.8 / groups;
+    // Stacked: where each category's next bar starts.
+    let mut base = vec![0.0f64; n];
     for (s, (name, values)) in chart.series.iter().enumerate() {
         let fill = colour(s).filled();
-        let bars = values
-            .iter()
-            .enumerate()
-            .filter(|(_, v)| v.is_finite())
-            .map(|(i, &v)| {
+        let mut rects = Vec::new();
+        for (i, &v) in values.iter().enumerate() {
+            if !v.is_finite() {
+                continue;
+            }
+            if stacked {
+                let x0 = i as f64 + 0.1;
+                let y0 = base[i];
+                base[i] += finite(v);
+                rects.push(Rectangle::new([(x0, y0), (x0 + width, base[i])], fill));
+            } else {
                 let x0 = i as f64 + 0.1 + s as f64 * width;
-                Rectangle::new([(x0, 0.0), (x0 + width * 0.92, v)], fill)
-            });
+                rects.push(Rectangle::new([(x0, 0.0), (x0 + width * 0.92, v)], fill));
+            }
+        }
+        let bars = rects;
         ctx.draw_series(bars)
             .map_err(err)?
             .label(name)

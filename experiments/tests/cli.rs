@@ -41,13 +41,6 @@ fn an_unknown_experiment_lists_the_valid_ones() {
 }
 
 #[test]
-fn a_planned_experiment_says_it_is_not_implemented() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = reproduce(&["--only", "table5", "--out", dir.path().to_str().unwrap()]);
-    assert_clean_failure(&out, 2, &["experiment `table5` is not implemented yet"]);
-}
-
-#[test]
 fn an_unusable_output_folder_is_named() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("a-file");

@@ -1,7 +1,7 @@
 //! `coherent render` (paper section 7): load a scene, build the chosen accelerator, render
 //! with the chosen lane backend on a pool of T threads through the progressive film, write
 //! the image, and print one summary line (rays by kind, time, Mrays/s, active lanes per
-//! packet per stage, material passes per packet).
+//! packet per stage and per ray depth, material passes per packet).
 
 use std::time::Instant;
 
@@ -139,7 +139,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .collect();
     println!(
         "{}: {}x{} {} ({} triangles), {} + {}, {} thread(s), {}: {:.3} s ({:.1} Mrays/s); rays: {}; \
-         active lanes per packet (of {}): {}; material passes per packet {:.2}; \
+         active lanes per packet (of {}): {}; by depth: {}; material passes per packet {:.2}; \
          build {:.3} s, {:.1} MB; load {:.3} s -> {}",
         scene.name,
         w,
@@ -155,6 +155,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         kinds.join(", "),
         backend.lanes(),
         lanes.join(", "),
+        st.depth_summary(),
         st.materials.passes_per_packet(),
         build.as_secs_f64(),
         memory as f64 / 1e6,

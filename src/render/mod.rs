@@ -25,7 +25,8 @@ use crate::material::{ShadeHits, Shading};
 use crate::scene::RenderScene;
 use crate::texture::lod_from_differentials;
 
-pub use stats::{LaneCount, RayKind, RenderStats};
+use stats::StageClock;
+pub use stats::{LaneCount, RayKind, RenderStats, Stage};
 pub use surface::{Differentials, Geometry, Surface};
 
 /// The renderer of one scene with one accelerator, for one image size.
@@ -41,6 +42,9 @@ pub struct Renderer<'s, A: Accel> {
     ior: Vec<f32>,
     /// Reflection/refraction depth (0 = camera rays only).
     pub depth: u32,
+    /// Time each stage of the pipeline into [`RenderStats::stage_ns`] (off by default: it
+    /// reads the clock several times per packet; when off the stages read no clock).
+    pub time_stages: bool,
 }
 
 /// A packet of rays in flight with its per-lane state.
@@ -82,6 +86,7 @@ impl<'s, A: Accel> Renderer<'s, A> {
             transmissive,
             ior,
             depth: scene.depth,
+            time_stages: false,
         })
     }
 
@@ -109,6 +114,7 @@ impl<'s, A: Accel> Renderer<'s, A> {
         stats: &mut RenderStats,
     ) -> Rgbs<L> {
         stats.width = L::N as u32;
+        let mut clock = StageClock::start(self.time_stages);
         let cam = self.camera.rays(l, xs, ys);
         let zero3 = Vec3s::splat(l, glam::Vec3::ZERO);
         let mut seg = Segment {
@@ -128,6 +134,7 @@ impl<'s, A: Accel> Renderer<'s, A> {
         let mut radiance = Rgbs::zero(l);
         // Depth-first over the ray tree; allocates only when a packet spawns children.
         let mut pending: Vec<Segment<L>> = Vec::new();
+        clock.lap(stats, Stage::Other);
         loop {
             self.segment(l, &seg, ids, &mut radiance, &mut pending, stats);
             match pending.pop() {
@@ -160,10 +167,12 @@ impl<'s, A: Accel> Renderer<'s, A> {
         if n_active == 0 {
             return;
         }
+        let mut clock = StageClock::start(self.time_stages);
         stats.count(seg.kind, n_active);
         stats.count_depth(seg.depth as usize, n_active);
         let dir = seg.rays.dir;
         let hits = self.accel.intersect(l, &seg.rays, seg.active);
+        clock.lap(stats, Stage::Traversal);
         let hit = hits.hit_mask(l) & seg.active;
         let miss = seg.active.and_not(hit);
 
@@ -176,6 +185,7 @@ impl<'s, A: Accel> Renderer<'s, A> {
             *radiance += Rgbs::select(miss, seg.throughput * bg, Rgbs::zero(l));
         }
         if hit.none() {
+            clock.lap(stats, Stage::Other);
             return;
         }
 
@@ -207,10 +217,12 @@ impl<'s, A: Accel> Renderer<'s, A> {
             lod: zero,
         };
 
+        clock.lap(stats, Stage::Other);
         // The material pass without a light: mip levels, ambient term, reflection and
         // refraction weights.
         let base = self.shade_materials(l, &mut ctx, Some(&surf), &ns, stats);
         let mut lit = Rgbs::select(hit, base.ambient, Rgbs::zero(l));
+        clock.lap(stats, Stage::Shading);
 
         // Each light, each of its samples, under its mask, with a shadow packet.
         let can_light = hit & ns.dot(wo).gt(zero);
@@ -226,23 +238,28 @@ impl<'s, A: Accel> Renderer<'s, A> {
                     let ls = light.sample(l, &surf.p, &ns, can_light, k, u);
                     let on = ls.active & can_light;
                     if on.none() {
+                        clock.lap(stats, Stage::Lights);
                         continue;
                     }
                     let shadow = shadow_rays(l, &surf.p, &ns, &ls);
                     stats.count(RayKind::Shadow, on.count());
+                    clock.lap(stats, Stage::Lights);
                     let visible = on.and_not(self.accel.occluded(l, &shadow, on));
+                    clock.lap(stats, Stage::Shadows);
                     if visible.none() {
                         continue;
                     }
                     ctx.active = visible;
                     let s = self.shade_materials(l, &mut ctx, None, &ls.wi, stats);
                     lit += Rgbs::select(visible, s.reflected * ls.li, Rgbs::zero(l));
+                    clock.lap(stats, Stage::Shading);
                 }
             }
         }
         *radiance += seg.throughput * lit;
 
         if seg.depth >= self.depth {
+            clock.lap(stats, Stage::Other);
             return;
         }
         let eps = (surf.p.x.abs().max(surf.p.y.abs()).max(surf.p.z.abs()) + 1.0) * 1e-4;
@@ -305,6 +322,7 @@ impl<'s, A: Accel> Renderer<'s, A> {
                 });
             }
         }
+        clock.lap(stats, Stage::Other);
     }
 
     /// Shades the active lanes of `ctx` one material at a time (the paper's passes, counted

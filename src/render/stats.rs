@@ -1,6 +1,7 @@
 //! What the packet pipeline counts where it happens (paper section 7's measurements, and the
 //! coherence the paper says falls with depth): rays by kind, packets and active lanes per
-//! stage and per depth, material passes per packet, NaN radiance.
+//! stage and per depth, material passes per packet, NaN radiance, and (when asked) where
+//! the time goes per stage of the pipeline.
 
 use crate::material::SplitCount;
 
@@ -27,6 +28,63 @@ impl RayKind {
             RayKind::Shadow => "shadow",
             RayKind::Reflection => "reflection",
             RayKind::Refraction => "refraction",
+        }
+    }
+}
+
+/// The stages of the packet pipeline that [`RenderStats::stage_ns`] times (only when the
+/// renderer's `time_stages` is on).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// First-hit queries of camera, reflection and refraction packets.
+    Traversal = 0,
+    /// Occlusion queries of shadow packets.
+    Shadows = 1,
+    /// Material passes (textures, tabulated BDFs included).
+    Shading = 2,
+    /// Light sampling and shadow-ray set-up.
+    Lights = 3,
+    /// Camera rays, the hit-to-surface gather, backgrounds and secondary-ray set-up.
+    Other = 4,
+}
+
+impl Stage {
+    pub const COUNT: usize = 5;
+    pub const ALL: [Stage; Stage::COUNT] = [
+        Stage::Traversal,
+        Stage::Shadows,
+        Stage::Shading,
+        Stage::Lights,
+        Stage::Other,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Traversal => "traversal",
+            Stage::Shadows => "shadows",
+            Stage::Shading => "shading",
+            Stage::Lights => "lights",
+            Stage::Other => "other",
+        }
+    }
+}
+
+/// A lap timer over the stages of one packet: each `lap` charges the time since the previous
+/// lap to a stage. Off (`None`), it reads no clock: one predictable branch per lap.
+pub(crate) struct StageClock(Option<std::time::Instant>);
+
+impl StageClock {
+    #[inline(always)]
+    pub(crate) fn start(on: bool) -> StageClock {
+        StageClock(on.then(std::time::Instant::now))
+    }
+
+    #[inline(always)]
+    pub(crate) fn lap(&mut self, stats: &mut RenderStats, stage: Stage) {
+        if let Some(last) = self.0 {
+            let now = std::time::Instant::now();
+            stats.stage_ns[stage as usize] += (now - last).as_nanos() as u64;
+            self.0 = Some(now);
         }
     }
 }
@@ -74,6 +132,9 @@ pub struct RenderStats {
     pub materials: SplitCount,
     /// Radiance samples that came out NaN (zeroed in the image).
     pub nan: u64,
+    /// Nanoseconds per [`Stage`], summed over threads; all zero unless the renderer's
+    /// `time_stages` is on.
+    pub stage_ns: [u64; Stage::COUNT],
 }
 
 impl RenderStats {
@@ -115,6 +176,21 @@ impl RenderStats {
         self.materials.packets += o.materials.packets;
         self.materials.passes += o.materials.passes;
         self.nan += o.nan;
+        for (a, b) in self.stage_ns.iter_mut().zip(&o.stage_ns) {
+            *a += b;
+        }
+    }
+
+    /// Average active lanes per traced packet at each depth (0 = camera rays), as
+    /// `d0 3.98, d1 2.10, ...`.
+    pub fn depth_summary(&self) -> String {
+        let depth: Vec<String> = self
+            .depth
+            .iter()
+            .enumerate()
+            .map(|(d, c)| format!("d{d} {:.2}", c.average()))
+            .collect();
+        depth.join(", ")
     }
 
     /// One line: rays by kind, average active lanes per packet per stage, material passes
@@ -132,18 +208,12 @@ impl RenderStats {
                 lanes.push(format!("{} {:.2}", k.name(), c.average()));
             }
         }
-        let depth: Vec<String> = self
-            .depth
-            .iter()
-            .enumerate()
-            .map(|(d, c)| format!("d{d} {:.2}", c.average()))
-            .collect();
         let mut s = format!(
             "rays: {}; active lanes per packet (of {}): {}; by depth: {}; material passes per packet {:.2}",
             parts.join(", "),
             self.width,
             lanes.join(", "),
-            depth.join(", "),
+            self.depth_summary(),
             self.materials.passes_per_packet()
         );
         if self.nan > 0 {

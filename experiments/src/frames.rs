@@ -1,0 +1,159 @@
+//! Whole frames of the test scenes (paper section 7, Tables 3 and 5), shared by the `table3`
+//! and `table5` experiments: which scenes there are (the built-ins, then every `*.toml` of
+//! the repository's `scenes/` folder), loading them with a message instead of a failure when
+//! their assets are missing, and rendering one frame through the same code path as
+//! `coherent render` (the progressive film with a fixed number of samples per pixel, in a
+//! rayon pool of T threads).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Context;
+use coherent::accel::Accel;
+use coherent::accel_any::{AccelKind, AnyAccel, AnyParams};
+use coherent::film::{FilmOptions, Method, Rendered, render};
+use coherent::render::{RenderStats, Renderer};
+use coherent::scene::RenderScene;
+use coherent::simd::Backend;
+
+/// The scene files' folder: `$COHERENT_SCENES` if set, else the repository's `scenes/`.
+pub fn scenes_dir() -> PathBuf {
+    match std::env::var_os("COHERENT_SCENES") {
+        Some(d) => PathBuf::from(d),
+        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes"),
+    }
+}
+
+/// Which scenes an experiment renders and how.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// Include the built-in scenes (`coherent scenes`).
+    pub builtins: bool,
+    /// Folder whose `*.toml` files are scenes too (a missing folder holds none).
+    pub scenes_dir: PathBuf,
+    /// Scenes with more triangles are left out (quick mode renders the small scenes).
+    pub max_triangles: usize,
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel (uniform, one pass per sample).
+    pub spp: u32,
+}
+
+/// A scene ready to render, or why not.
+pub enum Loaded {
+    Scene(Box<RenderScene>),
+    /// Left out by the plan (too large for quick mode): not an error.
+    TooLarge {
+        triangles: usize,
+    },
+    /// Failed to load (missing or corrupt assets): the message names the file.
+    Failed(String),
+}
+
+/// The scenes of `plan`, by name (built-ins by their name, files by their stem), in order:
+/// built-ins as `coherent scenes` lists them, then the files sorted by name.
+pub fn scene_specs(plan: &Plan) -> Vec<(String, String)> {
+    let mut specs = Vec::new();
+    if plan.builtins {
+        for (name, _) in coherent::scene::builtin_names() {
+            specs.push((name.to_owned(), name.to_owned()));
+        }
+    }
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&plan.scenes_dir)
+        .map(|dir| {
+            dir.filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+                .collect()
+        })
+        .unwrap_or_default();
+    files.sort();
+    for f in files {
+        let stem = f
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        specs.push((stem, f.to_string_lossy().into_owned()));
+    }
+    specs
+}
+
+/// Loads the scene `spec` at the plan's resolution and samples.
+pub fn load(plan: &Plan, spec: &str) -> Loaded {
+    let mut scene = match coherent::scene::load(spec) {
+        Ok(s) => s,
+        Err(e) => return Loaded::Failed(format!("{e:#}")),
+    };
+    let triangles = scene.triangles();
+    if triangles > plan.max_triangles {
+        return Loaded::TooLarge { triangles };
+    }
+    scene.width = plan.width;
+    scene.height = plan.height;
+    match scene.validate() {
+        Ok(()) => Loaded::Scene(Box::new(scene)),
+        Err(e) => Loaded::Failed(format!("{e:#}")),
+    }
+}
+
+/// The accelerators usable here, and a `(name, why)` for each that is not.
+pub fn accels() -> (Vec<AccelKind>, Vec<(String, String)>) {
+    let mut ok = Vec::new();
+    let mut skipped = Vec::new();
+    for k in [AccelKind::Bsp, AccelKind::Embree, AccelKind::Obvhs] {
+        match k.unavailable_reason() {
+            None => ok.push(k),
+            Some(why) => skipped.push((format!("accel {k}"), why)),
+        }
+    }
+    (ok, skipped)
+}
+
+/// The backends usable here, and a `(name, why)` for each that is not.
+pub fn backends() -> (Vec<Backend>, Vec<(String, String)>) {
+    let mut skipped = Vec::new();
+    for b in Backend::ALL {
+        if let Some(why) = b.unavailable_reason() {
+            skipped.push((format!("backend {b}"), why));
+        }
+    }
+    (Backend::available(), skipped)
+}
+
+/// The widest backend usable here (the last of the widest, as `coherent render` picks).
+pub fn widest() -> Backend {
+    Backend::available()
+        .into_iter()
+        .max_by_key(|b| b.lanes())
+        .unwrap_or(Backend::Scalar)
+}
+
+/// The renderer of `scene` with accelerator `kind`.
+pub fn renderer(scene: &RenderScene, kind: AccelKind) -> anyhow::Result<Renderer<'_, AnyAccel>> {
+    let accel = AnyAccel::build(&scene.accel_scene(), &AnyParams::of(kind))
+        .with_context(|| format!("building the {kind} accelerator for {}", scene.name))?;
+    Renderer::new(scene, accel, scene.width, scene.height)
+        .with_context(|| format!("the camera of {}", scene.name))
+}
+
+/// A rayon pool of `threads` threads.
+pub fn pool(threads: usize) -> anyhow::Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .context("starting the worker threads")
+}
+
+/// Renders one frame as `coherent render --spp N` does (film, Halton samples, all passes) in
+/// `pool`; returns it and its seconds (the render only: no tone mapping, no file).
+pub fn frame(
+    pool: &rayon::ThreadPool,
+    backend: Backend,
+    renderer: &Renderer<'_, AnyAccel>,
+    plan: &Plan,
+) -> anyhow::Result<(Rendered<RenderStats>, f64)> {
+    let opts = FilmOptions::new(plan.width, plan.height, Method::Uniform { spp: plan.spp });
+    let start = Instant::now();
+    let rendered = pool.install(|| render(backend, renderer, &opts, &|_| {}))?;
+    let seconds = start.elapsed().as_secs_f64();
+    Ok((std::hint::black_box(rendered), seconds))
+}

@@ -1,0 +1,782 @@
+//! Experiment `table3`: the paper's Table 3 (section 7), whole-frame rendering time of the
+//! test scenes per lane backend and accelerator, 1 thread, with the speedup over the scalar
+//! backend (the same renderer, one ray at a time) and the PSNR of each image against the
+//! scalar + BSP one; then where the time goes (per stage of the pipeline, from a separate
+//! timed-stages run so the timed frames carry no clock reads) and how coherent the packets
+//! stay (average active lanes per packet at each ray depth; the paper says coherence falls
+//! with depth).
+//!
+//! Protocol: every scene (the built-ins, then the repository's `scenes/*.toml`; quick mode:
+//! only scenes up to 20,000 triangles at 160 x 120) renders at 1024 x 768 with 1 sample per
+//! pixel through the progressive film, as `coherent render --spp 1 --threads 1` does. Per
+//! scene, every (accel, backend) pair renders once untimed (its image and statistics), then
+//! 3 timed rounds visit every pair in turn; `seconds` is the median of the rounds.
+
+use std::collections::BTreeMap;
+use std::fmt::Display;
+
+use coherent::accel_any::AccelKind;
+use coherent::render::centres::psnr;
+use coherent::render::{RenderStats, Stage};
+use coherent::simd::Backend;
+
+use crate::ctx::Ctx;
+use crate::experiment::{Experiment, Status};
+use crate::frames::{self, Loaded, Plan};
+use crate::plot::{BarChart, LineChart, Series};
+use crate::table::{PaperTable, Table, fmt_num, markdown_table};
+use crate::timing::{median, speedup};
+
+pub const EXPERIMENT: Experiment = Experiment {
+    name: "table3",
+    description: "rendering the test scenes per backend and accel",
+    paper: "Table 3 (section 7)",
+    csv: &[FILE, BREAKDOWN_FILE, COHERENCE_FILE, SKIPPED_FILE],
+    plots: &["table3_speedup", "table3_breakdown", "table3_coherence"],
+    status: Status::Ready { run, report },
+};
+
+const FILE: &str = "table3_scenes.csv";
+/// The contract's columns, then rays per second, rays traced and the frame's size.
+const HEADER: &[&str] = &[
+    "scene", "backend", "lanes", "accel", "seconds", "speedup", "psnr_db", "mrays_s", "rays",
+    "width", "height", "spp",
+];
+const BREAKDOWN_FILE: &str = "table3_breakdown.csv";
+const BREAKDOWN_HEADER: &[&str] = &["scene", "backend", "stage", "seconds", "share"];
+const COHERENCE_FILE: &str = "table3_coherence.csv";
+const COHERENCE_HEADER: &[&str] = &[
+    "scene",
+    "backend",
+    "lanes",
+    "depth",
+    "packets",
+    "avg_active_lanes",
+];
+/// Scenes, accelerators and backends left out, and why.
+const SKIPPED_FILE: &str = "table3_skipped.csv";
+const SKIPPED_HEADER: &[&str] = &["item", "reason"];
+
+/// The stages of the breakdown: the pipeline's own, then the film (sampling, accumulation,
+/// scheduling: the frame's time outside the tracer) and tone mapping.
+const STAGES: [&str; 7] = [
+    "traversal",
+    "shadows",
+    "shading",
+    "lights",
+    "other",
+    "film",
+    "tonemap",
+];
+
+/// The backends the breakdown plot shows (scalar and the native ones of 4, 8 and 16 lanes).
+const PLOTTED: [&str; 4] = ["scalar", "sse", "pulp8", "pulp16"];
+
+/// The paper's Table 3.
+const PAPER: PaperTable = PaperTable {
+    caption: "Table 3: a 1024 x 768 frame, 1 CPU. Paper: Pentium III 933 MHz, its non-SSE vs \
+              SSE renderer, its scenes (Car, SPDemo, Glass1, Room2); ours: scalar vs sse with \
+              the BSP, 1 thread, our stand-ins of its scenes, on the machine of \
+              `machine.json`. Seconds are not comparable (other machine, other scenes); the \
+              speedups are.",
+    key: "scene",
+    columns: &["non-SSE s", "SSE s", "speedup"],
+    rows: &[
+        ("car", &[489.88, 82.11, 5.97]),
+        ("spdemo", &[43.41, 2.63, 16.51]),
+        ("glass1", &[52.66, 6.18, 8.52]),
+        ("room2", &[35.12, 4.77, 7.36]),
+    ],
+};
+
+/// Speedup targets over scalar by lane count (`4 -> 4x`, `8 -> 6x`, `16 -> 8x`).
+const TARGETS: &[(usize, f64)] = &[(4, 4.0), (8, 6.0), (16, 8.0)];
+/// Every image within this PSNR of the scalar + BSP one.
+const PSNR_TARGET: f64 = 40.0;
+
+/// What the run renders: quick mode's small scenes and images, or the paper's frame.
+pub fn plan(ctx: &Ctx) -> Plan {
+    Plan {
+        builtins: true,
+        scenes_dir: frames::scenes_dir(),
+        max_triangles: ctx.pick(20_000, usize::MAX),
+        width: ctx.pick(160, 1024),
+        height: ctx.pick(120, 768),
+        spp: 1,
+    }
+}
+
+fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
+    let (backends, mut skipped) = frames::backends();
+    let (accels, s) = frames::accels();
+    skipped.extend(s);
+    let plan = plan(ctx);
+    run_plan(ctx, &plan, &backends, &accels, skipped)
+}
+
+/// Runs the experiment over `plan` with these backends and accelerators (scalar and BSP
+/// first: the references); `skipped` are the items already left out.
+pub fn run_plan(
+    ctx: &mut Ctx,
+    plan: &Plan,
+    backends: &[Backend],
+    accels: &[AccelKind],
+    mut skipped: Vec<(String, String)>,
+) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        backends.first() == Some(&Backend::Scalar) && accels.first() == Some(&AccelKind::Bsp),
+        "table3 needs scalar and bsp first (the references)"
+    );
+    for (item, why) in &skipped {
+        ctx.note(format!("table3: {item} skipped: {why}"));
+    }
+    let rounds = 3;
+    let pool = frames::pool(1)?;
+    let mut csv = ctx.csv(FILE, HEADER)?;
+    let mut breakdown = ctx.csv(BREAKDOWN_FILE, BREAKDOWN_HEADER)?;
+    let mut coherence = ctx.csv(COHERENCE_FILE, COHERENCE_HEADER)?;
+    let specs = frames::scene_specs(plan);
+    let bar = ctx.progress(specs.len() as u64, "table3");
+    for (name, spec) in &specs {
+        bar.set_message(name.clone());
+        let scene = match frames::load(plan, spec) {
+            Loaded::Scene(s) => s,
+            Loaded::TooLarge { triangles } => {
+                skipped.push((
+                    format!("scene {name}"),
+                    format!("{triangles} triangles: left out of --quick (full runs render it)"),
+                ));
+                bar.inc(1);
+                continue;
+            }
+            Loaded::Failed(why) => {
+                ctx.note(format!("table3: scene {name} skipped: {why}"));
+                skipped.push((format!("scene {name}"), why));
+                bar.inc(1);
+                continue;
+            }
+        };
+        let mut renderers = Vec::new();
+        for &kind in accels {
+            match frames::renderer(&scene, kind) {
+                Ok(r) => renderers.push((kind, r)),
+                Err(e) => {
+                    let why = format!("{e:#}");
+                    ctx.note(format!("table3: scene {name} with {kind} skipped: {why}"));
+                    skipped.push((format!("scene {name} accel {kind}"), why));
+                }
+            }
+        }
+        if renderers.first().map(|(k, _)| *k) != Some(AccelKind::Bsp) {
+            bar.inc(1);
+            continue;
+        }
+
+        // Untimed frames: the images (PSNR against scalar + BSP) and the statistics.
+        let mut reference: Option<Vec<[f32; 3]>> = None;
+        let mut psnrs = BTreeMap::new();
+        let mut stats: BTreeMap<(usize, Backend), RenderStats> = BTreeMap::new();
+        for (a, (_, r)) in renderers.iter().enumerate() {
+            for &b in backends {
+                let (rendered, _) = frames::frame(&pool, b, r, plan)?;
+                let image = rendered.tone_mapped(Backend::Scalar)?;
+                let db = match &reference {
+                    None => {
+                        let png = format!("images/table3_{name}.png");
+                        std::fs::create_dir_all(ctx.path("images"))?;
+                        rendered.write_png(&ctx.path(&png))?;
+                        reference = Some(image);
+                        f64::INFINITY
+                    }
+                    Some(reference) => psnr(&image, reference, 1.0),
+                };
+                psnrs.insert((a, b), db);
+                stats.insert((a, b), rendered.stats);
+            }
+        }
+        // Timed frames: rounds over every (accel, backend) pair in turn.
+        let mut seconds: BTreeMap<(usize, Backend), Vec<f64>> = BTreeMap::new();
+        for _ in 0..rounds {
+            for (a, (_, r)) in renderers.iter().enumerate() {
+                for &b in backends {
+                    let (_, s) = frames::frame(&pool, b, r, plan)?;
+                    seconds.entry((a, b)).or_default().push(s);
+                }
+            }
+        }
+        for (a, (kind, _)) in renderers.iter().enumerate() {
+            let scalar = median(&seconds[&(a, Backend::Scalar)]);
+            for &b in backends {
+                let s = median(&seconds[&(a, b)]);
+                let rays = stats[&(a, b)].total_rays();
+                let cells: [&dyn Display; 12] = [
+                    name,
+                    &b.name(),
+                    &b.lanes(),
+                    kind,
+                    &format!("{s:.6e}"),
+                    &format!("{:.3}", speedup(scalar, s)),
+                    &format!("{:.2}", psnrs[&(a, b)]),
+                    &format!("{:.3}", rays as f64 / s * 1e-6),
+                    &rays,
+                    &plan.width,
+                    &plan.height,
+                    &plan.spp,
+                ];
+                csv.row(&cells)?;
+            }
+        }
+        // Coherence by depth, once per packet width (the BSP's frames).
+        let mut widths = Vec::new();
+        for &b in backends {
+            if widths.contains(&b.lanes()) {
+                continue;
+            }
+            widths.push(b.lanes());
+            for (d, c) in stats[&(0, b)].depth.iter().enumerate() {
+                coherence.row(&[
+                    name,
+                    &b.name(),
+                    &b.lanes(),
+                    &d,
+                    &c.packets,
+                    &format!("{:.4}", c.average()),
+                ])?;
+            }
+        }
+        // Where the time goes: one frame per backend with the stage clocks on (BSP).
+        let (_, r) = &mut renderers[0];
+        r.time_stages = true;
+        for &b in backends {
+            let (rendered, frame_s) = frames::frame(&pool, b, r, plan)?;
+            let t = std::time::Instant::now();
+            std::hint::black_box(rendered.tone_mapped(b)?);
+            let tonemap_s = t.elapsed().as_secs_f64();
+            let st = &rendered.stats;
+            let mut secs: Vec<f64> = Stage::ALL
+                .iter()
+                .map(|s| st.stage_ns[*s as usize] as f64 * 1e-9)
+                .collect();
+            let traced: f64 = secs.iter().sum();
+            secs.push((frame_s - traced).max(0.0));
+            secs.push(tonemap_s);
+            let total: f64 = secs.iter().sum();
+            for (stage, s) in STAGES.iter().zip(&secs) {
+                breakdown.row(&[
+                    name,
+                    &b.name(),
+                    stage,
+                    &format!("{s:.6e}"),
+                    &format!("{:.4}", s / total),
+                ])?;
+            }
+        }
+        r.time_stages = false;
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    csv.finish()?;
+    breakdown.finish()?;
+    coherence.finish()?;
+    let mut out = ctx.csv(SKIPPED_FILE, SKIPPED_HEADER)?;
+    for (item, why) in &skipped {
+        out.row(&[item, why])?;
+    }
+    out.finish()?;
+    plots(ctx)?;
+    Ok(())
+}
+
+/// The row of `t` with these key cells.
+fn find(t: &Table, keys: &[(&str, &str)]) -> anyhow::Result<Option<usize>> {
+    'rows: for r in 0..t.rows.len() {
+        for (c, v) in keys {
+            if t.get(r, c)? != *v {
+                continue 'rows;
+            }
+        }
+        return Ok(Some(r));
+    }
+    Ok(None)
+}
+
+fn plots(ctx: &Ctx) -> anyhow::Result<()> {
+    if let Some(t) = ctx.read_csv(FILE, HEADER)?
+        && !t.rows.is_empty()
+    {
+        let scenes = t.distinct("scene")?;
+        let mut series = Vec::new();
+        for b in t.distinct("backend")? {
+            let mut v = Vec::new();
+            for s in &scenes {
+                v.push(
+                    match find(&t, &[("scene", s), ("backend", &b), ("accel", "bsp")])? {
+                        Some(r) => t.f64(r, "speedup")?,
+                        None => f64::NAN,
+                    },
+                );
+            }
+            series.push((b, v));
+        }
+        series.push((
+            "paper SSE".to_owned(),
+            scenes
+                .iter()
+                .map(|s| {
+                    PAPER
+                        .rows
+                        .iter()
+                        .find(|(k, _)| k == s)
+                        .map_or(f64::NAN, |(_, v)| v[2])
+                })
+                .collect(),
+        ));
+        ctx.bar_chart(
+            "table3_speedup",
+            &BarChart {
+                title: "Table 3: whole-frame speedup over scalar (BSP, 1 thread)".into(),
+                y_label: "speedup over scalar".into(),
+                categories: scenes,
+                series,
+            },
+        )?;
+    }
+    if let Some(t) = ctx.read_csv(BREAKDOWN_FILE, BREAKDOWN_HEADER)?
+        && !t.rows.is_empty()
+    {
+        let mut categories = Vec::new();
+        for s in t.distinct("scene")? {
+            for b in t.distinct("backend")? {
+                // The plot keeps the native backends (the table has them all).
+                if PLOTTED.contains(&b.as_str())
+                    && find(&t, &[("scene", &s), ("backend", &b)])?.is_some()
+                {
+                    categories.push((s.clone(), b));
+                }
+            }
+        }
+        let mut series = Vec::new();
+        for stage in STAGES {
+            let mut v = Vec::new();
+            for (s, b) in &categories {
+                v.push(
+                    match find(&t, &[("scene", s), ("backend", b), ("stage", stage)])? {
+                        Some(r) => 100.0 * t.f64(r, "share")?,
+                        None => f64::NAN,
+                    },
+                );
+            }
+            series.push((stage.to_owned(), v));
+        }
+        ctx.stacked_bar_chart(
+            "table3_breakdown",
+            &BarChart {
+                title: "Where the time goes (BSP, 1 thread)".into(),
+                y_label: "% of frame time".into(),
+                categories: categories.iter().map(|(s, b)| format!("{s} {b}")).collect(),
+                series,
+            },
+        )?;
+    }
+    if let Some(t) = ctx.read_csv(COHERENCE_FILE, COHERENCE_HEADER)?
+        && !t.rows.is_empty()
+    {
+        let mut series = Vec::new();
+        for s in t.distinct("scene")? {
+            for lanes in t.distinct("lanes")? {
+                if lanes == "1" {
+                    continue;
+                }
+                let mut pts = Vec::new();
+                for r in t.rows_where("scene", &s)? {
+                    if t.get(r, "lanes")? == lanes {
+                        pts.push((
+                            t.f64(r, "depth")?,
+                            t.f64(r, "avg_active_lanes")? / t.f64(r, "lanes")?,
+                        ));
+                    }
+                }
+                if !pts.is_empty() {
+                    series.push(Series::new(format!("{s} ({lanes} lanes)"), pts));
+                }
+            }
+        }
+        if !series.is_empty() {
+            ctx.line_chart(
+                "table3_coherence",
+                &LineChart {
+                    title: "Active lanes per packet by ray depth (fraction of the width)".into(),
+                    x_label: "ray depth (0 = camera rays)".into(),
+                    y_label: "active lanes / lanes".into(),
+                    series,
+                    log2_x: false,
+                },
+            )?;
+        }
+    }
+    Ok(())
+}
+
+fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
+    let Some(t) = ctx.read_csv(FILE, HEADER)? else {
+        return Ok(None);
+    };
+    let mut md = String::new();
+    let size = if t.rows.is_empty() {
+        "no scene rendered".to_owned()
+    } else {
+        format!(
+            "{} x {} pixels, {} sample(s) per pixel",
+            t.get(0, "width")?,
+            t.get(0, "height")?,
+            t.get(0, "spp")?
+        )
+    };
+    md.push_str(&format!(
+        "Whole frames ({size}) through the progressive film, as `coherent render --spp N \
+         --threads 1` renders them, 1 thread; every (accel, backend) pair renders once \
+         untimed, then 3 rounds visit every pair in turn and `seconds` is the median. \
+         `speedup` = the scalar row's seconds (same scene, same accel) / this row's; \
+         `psnr_db` compares the tone-mapped image with the scalar + BSP one (peak 1). Quick \
+         mode renders only the scenes up to 20,000 triangles, at 160 x 120.\n\n"
+    ));
+    let mut ours = Vec::new();
+    for s in t.distinct("scene")? {
+        let get = |b: &str, c: &str| -> anyhow::Result<Option<f64>> {
+            Ok(
+                match find(&t, &[("scene", &s), ("backend", b), ("accel", "bsp")])? {
+                    Some(r) => Some(t.f64(r, c)?),
+                    None => None,
+                },
+            )
+        };
+        ours.push((
+            s.clone(),
+            vec![
+                get("scalar", "seconds")?,
+                get("sse", "seconds")?,
+                get("sse", "speedup")?,
+            ],
+        ));
+    }
+    md.push_str(&PAPER.beside(&ours));
+
+    md.push_str(
+        "\nEvery backend and accelerator: seconds (speedup over scalar with the same \
+         accelerator; PSNR in dB against scalar + BSP).\n\n",
+    );
+    let backends = t.distinct("backend")?;
+    let mut header = vec!["scene".to_owned(), "accel".to_owned()];
+    header.extend(backends.iter().cloned());
+    let mut rows = Vec::new();
+    for s in t.distinct("scene")? {
+        for a in t.distinct("accel")? {
+            let mut row = vec![s.clone(), a.clone()];
+            let mut any = false;
+            for b in &backends {
+                row.push(
+                    match find(&t, &[("scene", &s), ("backend", b), ("accel", &a)])? {
+                        Some(r) => {
+                            any = true;
+                            format!(
+                                "{} s ({}x, {} dB)",
+                                fmt_num(t.f64(r, "seconds")?),
+                                fmt_num(t.f64(r, "speedup")?),
+                                fmt_num(t.f64(r, "psnr_db")?)
+                            )
+                        }
+                        None => "—".into(),
+                    },
+                );
+            }
+            if any {
+                rows.push(row);
+            }
+        }
+    }
+    let h: Vec<&str> = header.iter().map(String::as_str).collect();
+    md.push_str(&markdown_table(&h, &rows));
+
+    md.push_str(&targets(&t)?);
+    if let Some(p) = ctx.plot_markdown("table3_speedup", "whole-frame speedup per scene") {
+        md.push_str(&p);
+    }
+
+    let scenes = t.distinct("scene")?;
+    let images: Vec<String> = scenes
+        .iter()
+        .filter(|s| ctx.path(&format!("images/table3_{s}.png")).is_file())
+        .map(|s| format!("![{s}](images/table3_{s}.png)"))
+        .collect();
+    if !images.is_empty() {
+        md.push_str("\nThe scalar + BSP images:\n\n");
+        md.push_str(&images.join("\n"));
+        md.push('\n');
+    }
+    if let Some(sk) = ctx.read_csv(SKIPPED_FILE, SKIPPED_HEADER)?
+        && !sk.rows.is_empty()
+    {
+        md.push_str("\nLeft out of this run:\n\n");
+        md.push_str(&sk.to_markdown());
+    }
+    if let Some(b) = ctx.read_csv(BREAKDOWN_FILE, BREAKDOWN_HEADER)? {
+        md.push_str(&breakdown_md(ctx, &b)?);
+    }
+    if let Some(c) = ctx.read_csv(COHERENCE_FILE, COHERENCE_HEADER)? {
+        md.push_str(&coherence_md(ctx, &c)?);
+    }
+    Ok(Some(md))
+}
+
+/// The targets: speedup over scalar per lane count (BSP), PSNR, BSP no slower than Embree.
+fn targets(t: &Table) -> anyhow::Result<String> {
+    let mut rows = Vec::new();
+    for r in 0..t.rows.len() {
+        let lanes = t.f64(r, "lanes")? as usize;
+        let (scene, backend, accel) =
+            (t.get(r, "scene")?, t.get(r, "backend")?, t.get(r, "accel")?);
+        if accel == "bsp"
+            && let Some((_, target)) = TARGETS.iter().find(|(l, _)| *l == lanes)
+        {
+            let s = t.f64(r, "speedup")?;
+            rows.push(vec![
+                scene.to_owned(),
+                format!("{backend} + bsp speedup >= {}x", fmt_num(*target)),
+                format!("{}x", fmt_num(s)),
+                met(s >= *target),
+            ]);
+        }
+        if accel == "embree"
+            && let Some(b) = find(
+                t,
+                &[("scene", scene), ("backend", backend), ("accel", "bsp")],
+            )?
+        {
+            let (bsp, embree) = (t.f64(b, "seconds")?, t.f64(r, "seconds")?);
+            rows.push(vec![
+                scene.to_owned(),
+                format!("{backend}: bsp seconds <= embree's"),
+                format!("{} s vs {} s", fmt_num(bsp), fmt_num(embree)),
+                met(bsp <= embree),
+            ]);
+        }
+    }
+    for s in t.distinct("scene")? {
+        let mut worst = f64::INFINITY;
+        let mut which = String::new();
+        for r in t.rows_where("scene", &s)? {
+            let db = t.f64(r, "psnr_db")?;
+            if db < worst {
+                worst = db;
+                which = format!("{} + {}", t.get(r, "backend")?, t.get(r, "accel")?);
+            }
+        }
+        rows.push(vec![
+            s.clone(),
+            format!("PSNR >= {PSNR_TARGET} dB, every backend and accel"),
+            format!("lowest {} dB ({which})", fmt_num(worst)),
+            met(worst >= PSNR_TARGET),
+        ]);
+    }
+    let mut md = String::from(
+        "\nTargets (sse >= 4x, 8 lanes >= 6x, 16 lanes >= 8x over scalar; PSNR >= 40 dB; BSP \
+         frame time <= Embree's at the same width):\n\n",
+    );
+    md.push_str(&markdown_table(&["scene", "target", "measured", ""], &rows));
+    Ok(md)
+}
+
+fn met(ok: bool) -> String {
+    if ok { "met" } else { "not met" }.to_owned()
+}
+
+fn breakdown_md(ctx: &Ctx, b: &Table) -> anyhow::Result<String> {
+    let mut md = String::from(
+        "\nWhere the time goes (`table3_breakdown.csv`): one more frame per backend with the \
+         BSP and the renderer's stage clocks on (they read the clock several times per packet, \
+         so these frames are a little slower than the timed ones above). `traversal` = first-hit \
+         queries of camera, reflection and refraction packets; `shadows` = occlusion queries; \
+         `shading` = material passes (textures and tabulated BDFs included); `lights` = light \
+         sampling and shadow-ray set-up; `other` = camera rays, the hit-to-surface gather and \
+         secondary-ray set-up; `film` = the frame's time outside the tracer (Halton sampling, \
+         accumulation, scheduling); `tonemap` = tone mapping the frame. Share of the total, \
+         %:\n\n",
+    );
+    let mut rows = Vec::new();
+    for s in b.distinct("scene")? {
+        for be in b.distinct("backend")? {
+            let mut row = vec![s.clone(), be.clone()];
+            let mut any = false;
+            for stage in STAGES {
+                row.push(
+                    match find(b, &[("scene", &s), ("backend", &be), ("stage", stage)])? {
+                        Some(r) => {
+                            any = true;
+                            format!("{:.1}", 100.0 * b.f64(r, "share")?)
+                        }
+                        None => "—".into(),
+                    },
+                );
+            }
+            if any {
+                rows.push(row);
+            }
+        }
+    }
+    let mut header = vec!["scene", "backend"];
+    header.extend(STAGES);
+    md.push_str(&markdown_table(&header, &rows));
+    if let Some(p) = ctx.plot_markdown("table3_breakdown", "share of frame time per stage") {
+        md.push_str(&p);
+    }
+    Ok(md)
+}
+
+fn coherence_md(ctx: &Ctx, c: &Table) -> anyhow::Result<String> {
+    let mut md = String::from(
+        "\nCoherence by ray depth (`table3_coherence.csv`): average active lanes per traced \
+         packet (camera rays at depth 0, then reflection and refraction packets; shadow packets \
+         are not counted here), per packet width. Secondary packets keep their parent's lanes, \
+         so a lane that missed, or whose surface neither reflects nor refracts, stays empty \
+         below it:\n\n",
+    );
+    let depths = c.distinct("depth")?;
+    let mut header = vec!["scene".to_owned(), "lanes".to_owned()];
+    header.extend(depths.iter().map(|d| format!("depth {d}")));
+    let mut rows = Vec::new();
+    for s in c.distinct("scene")? {
+        for lanes in c.distinct("lanes")? {
+            let mut row = vec![s.clone(), lanes.clone()];
+            let mut any = false;
+            for d in &depths {
+                row.push(
+                    match find(c, &[("scene", &s), ("lanes", &lanes), ("depth", d)])? {
+                        Some(r) => {
+                            any = true;
+                            format!(
+                                "{} ({} packets)",
+                                fmt_num(c.f64(r, "avg_active_lanes")?),
+                                c.get(r, "packets")?
+                            )
+                        }
+                        None => "—".into(),
+                    },
+                );
+            }
+            if any {
+                rows.push(row);
+            }
+        }
+    }
+    let h: Vec<&str> = header.iter().map(String::as_str).collect();
+    md.push_str(&markdown_table(&h, &rows));
+    if let Some(p) = ctx.plot_markdown("table3_coherence", "active lanes per packet by depth") {
+        md.push_str(&p);
+    }
+    Ok(md)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A scene file that loads, and one whose mesh is missing.
+    const GOOD: &str = r#"
+resolution = [16, 12]
+depth = 1
+
+[camera]
+position = [0.3, 1.1, 4]
+look_at = [0, 1, 0]
+
+[materials.red]
+type = "phong"
+diffuse = [0.7, 0.1, 0.1]
+
+[materials.mirror]
+type = "mirror"
+
+[[objects]]
+shape = "quad"
+material = "red"
+scale = [10, 1, 10]
+
+[[objects]]
+shape = "sphere"
+material = "mirror"
+translate = [0, 1, 0]
+
+[[lights]]
+type = "omni"
+position = [0, 3, 0]
+intensity = [10, 10, 10]
+"#;
+
+    #[test]
+    fn renders_scene_files_and_lists_those_that_fail() {
+        let dir = tempfile::tempdir().unwrap();
+        let scenes = dir.path().join("scenes");
+        std::fs::create_dir(&scenes).unwrap();
+        std::fs::write(scenes.join("ball.toml"), GOOD).unwrap();
+        std::fs::write(
+            scenes.join("broken.toml"),
+            GOOD.replace("shape = \"quad\"", "mesh = \"missing-asset.obj\""),
+        )
+        .unwrap();
+        let mut ctx = Ctx::new(dir.path(), true, coherent::machine::Machine::detect());
+        let plan = Plan {
+            builtins: false,
+            scenes_dir: scenes,
+            max_triangles: usize::MAX,
+            width: 16,
+            height: 12,
+            spp: 1,
+        };
+        let simd = frames::widest();
+        let mut backends = vec![Backend::Scalar];
+        if simd != Backend::Scalar {
+            backends.push(simd);
+        }
+        run_plan(&mut ctx, &plan, &backends, &[AccelKind::Bsp], Vec::new()).unwrap();
+        let t = ctx.read_csv(FILE, HEADER).unwrap().unwrap();
+        assert_eq!(t.rows.len(), backends.len());
+        let r = find(&t, &[("scene", "ball"), ("backend", simd.name())])
+            .unwrap()
+            .unwrap();
+        assert!(t.f64(r, "seconds").unwrap() > 0.0);
+        assert!(
+            t.f64(r, "psnr_db").unwrap() >= PSNR_TARGET,
+            "{:?}",
+            t.rows[r]
+        );
+        let sk = ctx.read_csv(SKIPPED_FILE, SKIPPED_HEADER).unwrap().unwrap();
+        assert_eq!(sk.rows.len(), 1);
+        assert_eq!(sk.get(0, "item").unwrap(), "scene broken");
+        assert!(sk.get(0, "reason").unwrap().contains("missing-asset.obj"));
+        // Depth 0 is every packet of camera rays: full but for the frame's edge.
+        let c = ctx
+            .read_csv(COHERENCE_FILE, COHERENCE_HEADER)
+            .unwrap()
+            .unwrap();
+        let r0 = find(&c, &[("scene", "ball"), ("lanes", "1"), ("depth", "0")])
+            .unwrap()
+            .unwrap();
+        assert_eq!(c.f64(r0, "avg_active_lanes").unwrap(), 1.0);
+        // The breakdown's shares add up to 1 per backend.
+        let b = ctx
+            .read_csv(BREAKDOWN_FILE, BREAKDOWN_HEADER)
+            .unwrap()
+            .unwrap();
+        let total: f64 = b
+            .rows_where("backend", "scalar")
+            .unwrap()
+            .iter()
+            .map(|&r| b.f64(r, "share").unwrap())
+            .sum();
+        assert!((total - 1.0).abs() < 1e-3, "{total}");
+        let md = report(&ctx).unwrap().unwrap();
+        assert!(md.contains("images/table3_ball.png"), "{md}");
+        assert!(md.contains("scene broken"), "{md}");
+        assert!(ctx.path("images/table3_ball.png").is_file());
+    }
+}

@@ -1,0 +1,290 @@
+//! Experiment `table5`: the paper's Table 5 (section 7), whole-frame rendering time with 1
+//! and 2 threads and every core of the machine, with the speedup over 1 thread.
+//!
+//! Protocol: the scenes and frames of `table3` (the same plan: quick mode renders the small
+//! scenes at 160 x 120), the BSP, the widest backend of this CPU and the scalar one; the
+//! threads are a rayon pool installed around the render, as `coherent render --threads T`
+//! does. Per scene and backend, every thread count renders once untimed, then 3 rounds visit
+//! every thread count in turn; `seconds` is the median.
+
+use std::collections::BTreeMap;
+use std::fmt::Display;
+
+use coherent::accel_any::AccelKind;
+use coherent::simd::Backend;
+
+use crate::ctx::Ctx;
+use crate::experiment::{Experiment, Status};
+use crate::frames::{self, Loaded, Plan};
+use crate::plot::{LineChart, Series};
+use crate::table::{PaperTable, fmt_num, markdown_table};
+use crate::timing::{median, speedup};
+
+pub const EXPERIMENT: Experiment = Experiment {
+    name: "table5",
+    description: "rendering with 1, 2, ... threads",
+    paper: "Table 5 (section 7)",
+    csv: &[FILE],
+    plots: &["table5_threads"],
+    status: Status::Ready { run, report },
+};
+
+const FILE: &str = "table5_threads.csv";
+/// The contract's columns, then the lanes of the backend.
+const HEADER: &[&str] = &["scene", "backend", "threads", "seconds", "speedup", "lanes"];
+
+/// The paper's Table 5 (its Car scene is called Polo there).
+const PAPER: PaperTable = PaperTable {
+    caption: "Table 5: a 1024 x 768 frame with SSE on 1 and 2 CPUs. Paper: dual Pentium III \
+              933 MHz, its scenes (car = its Polo/Car); ours: the widest backend of this CPU \
+              with the BSP, 1 and 2 threads, our stand-ins of its scenes. Seconds are not \
+              comparable; the speedups are.",
+    key: "scene",
+    columns: &["1 CPU s", "2 CPU s", "speedup"],
+    rows: &[
+        ("car", &[82.11, 41.06, 2.00]),
+        ("spdemo", &[2.63, 1.39, 1.89]),
+        ("glass1", &[6.18, 3.20, 1.93]),
+        ("room2", &[4.77, 2.49, 1.91]),
+    ],
+};
+
+/// 2 threads over 1, the target.
+const TARGET: f64 = 1.9;
+
+/// 1, 2 and every core, without repeats.
+pub fn thread_counts(cores: usize) -> Vec<usize> {
+    let mut v = vec![1, 2, cores.max(1)];
+    v.sort_unstable();
+    v.dedup();
+    v
+}
+
+fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
+    let plan = crate::table3::plan(ctx);
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut backends = vec![frames::widest()];
+    if backends[0] != Backend::Scalar {
+        backends.push(Backend::Scalar);
+    }
+    run_plan(ctx, &plan, &backends, &thread_counts(cores))
+}
+
+/// Runs the experiment over `plan` with these backends and thread counts.
+pub fn run_plan(
+    ctx: &mut Ctx,
+    plan: &Plan,
+    backends: &[Backend],
+    threads: &[usize],
+) -> anyhow::Result<()> {
+    let rounds = 3;
+    let pools = threads
+        .iter()
+        .map(|&t| frames::pool(t))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let mut csv = ctx.csv(FILE, HEADER)?;
+    let specs = frames::scene_specs(plan);
+    let bar = ctx.progress(specs.len() as u64, "table5");
+    for (name, spec) in &specs {
+        bar.set_message(name.clone());
+        let scene = match frames::load(plan, spec) {
+            Loaded::Scene(s) => s,
+            Loaded::TooLarge { .. } => {
+                bar.inc(1);
+                continue;
+            }
+            Loaded::Failed(why) => {
+                ctx.note(format!("table5: scene {name} skipped: {why}"));
+                bar.inc(1);
+                continue;
+            }
+        };
+        let r = frames::renderer(&scene, AccelKind::Bsp)?;
+        for &b in backends {
+            let mut seconds: BTreeMap<usize, Vec<f64>> = BTreeMap::new();
+            for pool in &pools {
+                frames::frame(pool, b, &r, plan)?; // warm-up
+            }
+            for _ in 0..rounds {
+                for (i, pool) in pools.iter().enumerate() {
+                    let (_, s) = frames::frame(pool, b, &r, plan)?;
+                    seconds.entry(i).or_default().push(s);
+                }
+            }
+            let one = median(&seconds[&0]);
+            for (i, &t) in threads.iter().enumerate() {
+                let s = median(&seconds[&i]);
+                let cells: [&dyn Display; 6] = [
+                    name,
+                    &b.name(),
+                    &t,
+                    &format!("{s:.6e}"),
+                    &format!("{:.3}", speedup(one, s)),
+                    &b.lanes(),
+                ];
+                csv.row(&cells)?;
+            }
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    csv.finish()?;
+    plot(ctx)?;
+    Ok(())
+}
+
+fn plot(ctx: &Ctx) -> anyhow::Result<()> {
+    let Some(t) = ctx.read_csv(FILE, HEADER)? else {
+        return Ok(());
+    };
+    let mut series = Vec::new();
+    let mut max_threads = 1.0f64;
+    for s in t.distinct("scene")? {
+        for b in t.distinct("backend")? {
+            let mut pts = Vec::new();
+            for r in t.rows_where("scene", &s)? {
+                if t.get(r, "backend")? == b {
+                    let n = t.f64(r, "threads")?;
+                    max_threads = max_threads.max(n);
+                    pts.push((n, t.f64(r, "speedup")?));
+                }
+            }
+            if !pts.is_empty() {
+                series.push(Series::new(format!("{s} {b}"), pts));
+            }
+        }
+    }
+    if series.is_empty() {
+        return Ok(());
+    }
+    series.push(Series::reference(
+        "ideal (= threads)",
+        vec![(1.0, 1.0), (max_threads, max_threads)],
+    ));
+    ctx.line_chart(
+        "table5_threads",
+        &LineChart {
+            title: "Table 5: whole-frame speedup over 1 thread (BSP)".into(),
+            x_label: "threads".into(),
+            y_label: "speedup over 1 thread".into(),
+            series,
+            log2_x: true,
+        },
+    )?;
+    Ok(())
+}
+
+fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
+    let Some(t) = ctx.read_csv(FILE, HEADER)? else {
+        return Ok(None);
+    };
+    let mut md = String::from(
+        "The frames of `table3` (same scenes, size and samples; BSP) on a rayon pool of 1, 2 \
+         and every core of the machine (`machine.json`), with the widest backend of this CPU \
+         and the scalar one; every thread count renders once untimed, then 3 rounds visit \
+         them in turn and `seconds` is the median; `speedup` = 1-thread seconds / this row's. \
+         On a machine shared with other work, the speedup reads low.\n\n",
+    );
+    let find = |s: &str, b: &str, n: &str| -> anyhow::Result<Option<usize>> {
+        for r in t.rows_where("scene", s)? {
+            if t.get(r, "backend")? == b && t.get(r, "threads")? == n {
+                return Ok(Some(r));
+            }
+        }
+        Ok(None)
+    };
+    // The widest backend in the file (the one beside the paper's SSE).
+    let mut simd: Option<(usize, String)> = None;
+    for r in 0..t.rows.len() {
+        let lanes = t.f64(r, "lanes")? as usize;
+        if simd.as_ref().is_none_or(|(l, _)| lanes > *l) {
+            simd = Some((lanes, t.get(r, "backend")?.to_owned()));
+        }
+    }
+    let simd = simd.map(|(_, b)| b).unwrap_or_else(|| "scalar".to_owned());
+    let mut ours = Vec::new();
+    for s in t.distinct("scene")? {
+        let get = |n: &str, c: &str| -> anyhow::Result<Option<f64>> {
+            Ok(match find(&s, &simd, n)? {
+                Some(r) => Some(t.f64(r, c)?),
+                None => None,
+            })
+        };
+        ours.push((
+            s.clone(),
+            vec![
+                get("1", "seconds")?,
+                get("2", "seconds")?,
+                get("2", "speedup")?,
+            ],
+        ));
+    }
+    md.push_str(&PAPER.beside(&ours));
+    md.push_str(&format!("\n(ours: backend `{simd}`.) Every row:\n\n"));
+    let threads = t.distinct("threads")?;
+    let mut header = vec!["scene".to_owned(), "backend".to_owned()];
+    header.extend(threads.iter().map(|n| format!("{n} threads")));
+    header.push("2 threads >= 1.9x".to_owned());
+    let mut rows = Vec::new();
+    for s in t.distinct("scene")? {
+        for b in t.distinct("backend")? {
+            let mut row = vec![s.clone(), b.clone()];
+            for n in &threads {
+                row.push(match find(&s, &b, n)? {
+                    Some(r) => format!(
+                        "{} s ({}x)",
+                        fmt_num(t.f64(r, "seconds")?),
+                        fmt_num(t.f64(r, "speedup")?)
+                    ),
+                    None => "—".into(),
+                });
+            }
+            row.push(match find(&s, &b, "2")? {
+                Some(r) if t.f64(r, "speedup")? >= TARGET => "met".into(),
+                Some(_) => "not met".into(),
+                None => "— (one core)".into(),
+            });
+            rows.push(row);
+        }
+    }
+    let h: Vec<&str> = header.iter().map(String::as_str).collect();
+    md.push_str(&markdown_table(&h, &rows));
+    if let Some(p) = ctx.plot_markdown("table5_threads", "speedup over 1 thread") {
+        md.push_str(&p);
+    }
+    Ok(Some(md))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thread_counts_are_deduplicated() {
+        assert_eq!(thread_counts(1), [1, 2]);
+        assert_eq!(thread_counts(2), [1, 2]);
+        assert_eq!(thread_counts(16), [1, 2, 16]);
+    }
+
+    #[test]
+    fn rows_per_thread_count_and_a_report() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut ctx = Ctx::new(dir.path(), true, coherent::machine::Machine::detect());
+        let plan = Plan {
+            builtins: true,
+            scenes_dir: dir.path().join("no-scenes"),
+            max_triangles: 1_000,
+            width: 16,
+            height: 12,
+            spp: 1,
+        };
+        run_plan(&mut ctx, &plan, &[Backend::Scalar], &[1, 2]).unwrap();
+        let t = ctx.read_csv(FILE, HEADER).unwrap().unwrap();
+        // spdemo (988 triangles) is the only built-in under 1,000.
+        assert_eq!(t.distinct("scene").unwrap(), ["spdemo"]);
+        assert_eq!(t.rows.len(), 2);
+        assert_eq!(t.f64(0, "speedup").unwrap(), 1.0);
+        let md = report(&ctx).unwrap().unwrap();
+        assert!(md.contains("| spdemo | 2.63 |"), "{md}");
+    }
+}
