@@ -119,12 +119,9 @@ pub fn backends() -> (Vec<Backend>, Vec<(String, String)>) {
     (Backend::available(), skipped)
 }
 
-/// The widest backend usable here (the last of the widest, as `coherent render` picks).
+/// The widest hand-written backend usable here (the one `coherent render` picks by default).
 pub fn widest() -> Backend {
-    Backend::available()
-        .into_iter()
-        .max_by_key(|b| b.lanes())
-        .unwrap_or(Backend::Scalar)
+    Backend::widest()
 }
 
 /// The renderer of `scene` with accelerator `kind`.

@@ -69,8 +69,9 @@ const STAGES: [&str; 7] = [
     "tonemap",
 ];
 
-/// The backends the breakdown plot shows (scalar and the native ones of 4, 8 and 16 lanes).
-const PLOTTED: [&str; 4] = ["scalar", "sse", "pulp8", "pulp16"];
+/// The backends the breakdown plot shows (scalar and the hand-written ones of 4, 8 and 16
+/// lanes).
+const PLOTTED: [&str; 4] = ["scalar", "sse", "avx2", "avx512"];
 
 /// The paper's Table 3.
 const PAPER: PaperTable = PaperTable {
