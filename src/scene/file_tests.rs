@@ -288,6 +288,11 @@ fn a_missing_or_corrupt_asset_names_it_and_how_to_fetch_it() {
         "{msg}"
     );
 
+    // From here on the environment map is there (its content is never read: loading stops
+    // at the mesh), so the mesh's own files are what is missing or corrupt.
+    std::fs::create_dir_all(d.path().join(".cache/hdr")).unwrap();
+    std::fs::write(d.path().join(".cache/hdr/studio.exr"), b"not read").unwrap();
+
     // A glTF there whose buffer is not: the buffer is named as the missing asset.
     let gltf = super::gltf::tests::quad_gltf();
     let start = gltf.find("data:application").unwrap();
