@@ -134,8 +134,12 @@ pub fn renderer(scene: &RenderScene, kind: AccelKind) -> anyhow::Result<Renderer
 
 /// A rayon pool of `threads` threads.
 pub fn pool(threads: usize) -> anyhow::Result<rayon::ThreadPool> {
+    // 64 MiB reserved per worker, as `coherent render` does: unoptimised builds (this crate's
+    // tests) keep the inlined pipeline's packet temporaries on the stack, and overflowed
+    // rayon's default 2 MiB.
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
+        .stack_size(64 << 20)
         .build()
         .context("starting the worker threads")
 }
