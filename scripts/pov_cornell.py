@@ -10,7 +10,7 @@ ambient (the light patch glows through its ambient term). Coordinates are copied
 are: POV-Ray is left-handed, and the file's camera (`right <-1,0,0>`) mirrors x back, so the
 renderer's right-handed camera at the same place, looking +z with +y up (its right is -x),
 sees the image POV-Ray renders. The camera and the light (3 x 3 area-light patches under
-the ceiling) are written into scenes/cornell.toml by hand, from the same file.
+the ceiling) are written into scenes/cornell_pov.toml by hand, from the same file.
 
 Usage: python3 scripts/pov_cornell.py cornell.pov cornell.obj   (writes cornell.mtl beside)
 """
