@@ -136,8 +136,8 @@ pub fn line_chart(out: &Path, stem: &str, chart: &LineChart) -> anyhow::Result<P
     write_both(out, stem, &Lines { chart, x0, x1, y1 })
 }
 
-/// Writes `chart` as `out/plots/{stem}.png` and `.svg`.
-pub fn bar_chart(out: &Path, stem: &str, chart: &BarChart) -> anyhow::Result<PlotFiles> {
+/// A bar chart's data is drawable: categories and series, one value per category each.
+fn check_bars(stem: &str, chart: &BarChart) -> anyhow::Result<()> {
     if chart.categories.is_empty() || chart.series.is_empty() {
         return Err(anyhow!("plot {stem}: no categories or no series"));
     }
@@ -152,26 +152,19 @@ pub fn bar_chart(out: &Path, stem: &str, chart: &BarChart) -> anyhow::Result<Plo
             chart.categories.len()
         ));
     }
+    Ok(())
+}
+
+/// Writes `chart` as `out/plots/{stem}.png` and `.svg`.
+pub fn bar_chart(out: &Path, stem: &str, chart: &BarChart) -> anyhow::Result<PlotFiles> {
+    check_bars(stem, chart)?;
     write_both(out, stem, chart)
 }
 
 /// Writes `chart` with its series stacked in each category (e.g. the shares of frame time
 /// per stage) as `out/plots/{stem}.png` and `.svg`.
 pub fn stacked_bar_chart(out: &Path, stem: &str, chart: &BarChart) -> anyhow::Result<PlotFiles> {
-    if chart.categories.is_empty() || chart.series.is_empty() {
-        return Err(anyhow!("plot {stem}: no categories or no series"));
-    }
-    if let Some((name, values)) = chart
-        .series
-        .iter()
-        .find(|(_, v)| v.len() != chart.categories.len())
-    {
-        return Err(anyhow!(
-            "plot {stem}: series {name} has {} values for {} categories",
-            values.len(),
-            chart.categories.len()
-        ));
-    }
+    check_bars(stem, chart)?;
     write_both(out, stem, &Stacked(chart))
 }
 
