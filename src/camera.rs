@@ -117,7 +117,9 @@ impl PinholeCamera {
         let inv = l.splat(1.0) / len2.sqrt();
         let dir = d * inv;
         // d(d/|d|) = (dd - dir (dir . dd)) / |d|
-        let diff = |dd: Vec3s<L>| (dd - dir * dir.dot(dd)) * inv;
+        // Written out twice, not a closure: see `scripts/check-inlining.sh`.
+        let ddir_dx = (dx - dir * dir.dot(dx)) * inv;
+        let ddir_dy = (dy - dir * dir.dot(dy)) * inv;
         CameraRays {
             rays: Rays {
                 origin: Vec3s::splat(l, self.position),
@@ -125,8 +127,8 @@ impl PinholeCamera {
                 tmin: l.splat(0.0),
                 tmax: l.splat(f32::INFINITY),
             },
-            ddir_dx: diff(dx),
-            ddir_dy: diff(dy),
+            ddir_dx,
+            ddir_dy,
         }
     }
 }

@@ -353,11 +353,18 @@ impl Kernel for Lighting<'_> {
         for _ in 0..self.passes {
             let mut i = 0;
             while i + L::N <= pts.len() {
-                let load3 = |v: &[Vec<f32>; 3]| {
-                    Vec3s::new(l.load(&v[0][i..]), l.load(&v[1][i..]), l.load(&v[2][i..]))
-                };
-                let p = std::hint::black_box(load3(&pts.p));
-                let n = std::hint::black_box(load3(&pts.n));
+                let (pp, pn) = (&pts.p, &pts.n);
+                let p = Vec3s::new(
+                    l.load(&pp[0][i..]),
+                    l.load(&pp[1][i..]),
+                    l.load(&pp[2][i..]),
+                );
+                let n = Vec3s::new(
+                    l.load(&pn[0][i..]),
+                    l.load(&pn[1][i..]),
+                    l.load(&pn[2][i..]),
+                );
+                let (p, n) = (std::hint::black_box(p), std::hint::black_box(n));
                 let u = [l.load(&pts.u[0][i..]), l.load(&pts.u[1][i..])];
                 let active = l.splat_mask(true);
                 for k in 0..samples {

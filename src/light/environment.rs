@@ -357,8 +357,12 @@ impl Environment {
         let (sp, cp) = sincos(l, uu * std::f32::consts::TAU - std::f32::consts::PI);
         let (st, ct) = sincos(l, theta);
         let (sp, cp) = (-sp, -cp);
-        let ax = |k: usize| Vec3s::splat(l, self.axes[k]);
-        let wi = ax(0).mul_add(st * cp, ax(1).mul_add(st * sp, ax(2) * ct));
+        let ax = [
+            Vec3s::splat(l, self.axes[0]),
+            Vec3s::splat(l, self.axes[1]),
+            Vec3s::splat(l, self.axes[2]),
+        ];
+        let wi = ax[0].mul_add(st * cp, ax[1].mul_add(st * sp, ax[2] * ct));
         let texel = j * l.splat_i32(w as i32) + i;
         let pdf = l.gather(&m.pdf, texel);
         // li = L / (pdf_omega * samples), pdf_omega = pdf / (2 pi^2 sin(theta)).

@@ -69,8 +69,11 @@ impl Strata {
             // floor on SSE2), and stay below 1 when rounding reaches it.
             let one = l.splat(1.0);
             let below = l.splat(1.0f32.next_down());
-            let wrap = |x: L::F32s| x.ge(one).select(x - one, x).min(below);
-            [wrap(l.splat(o[0]) + u[0]), wrap(l.splat(o[1]) + u[1])]
+            let x = [l.splat(o[0]) + u[0], l.splat(o[1]) + u[1]];
+            [
+                x[0].ge(one).select(x[0] - one, x[0]).min(below),
+                x[1].ge(one).select(x[1] - one, x[1]).min(below),
+            ]
         } else {
             [l.splat(o[0]), l.splat(o[1])]
         }

@@ -184,15 +184,8 @@ impl Geometry {
         for k in 0..9 {
             m[k] = l.gather(&self.xform[k], inst);
         }
-        let lin = |v: Vec3s<L>| {
-            Vec3s::new(
-                m[0].mul_add(v.x, m[3].mul_add(v.y, m[6] * v.z)),
-                m[1].mul_add(v.x, m[4].mul_add(v.y, m[7] * v.z)),
-                m[2].mul_add(v.x, m[5].mul_add(v.y, m[8] * v.z)),
-            )
-        };
-        let e1 = lin(po[1] - po[0]);
-        let e2 = lin(po[2] - po[0]);
+        let e1 = mat3_mul(&m, po[1] - po[0]);
+        let e2 = mat3_mul(&m, po[2] - po[0]);
         let ng = e1.cross(e2).normalize();
 
         // Shading normal: interpolated vertex normals through the cofactor matrix.
@@ -210,11 +203,7 @@ impl Geometry {
         for k in 0..9 {
             c[k] = l.gather(&self.cofactor[k], inst);
         }
-        let n_world: Vec3s<L> = Vec3s::new(
-            c[0].mul_add(n_obj.x, c[3].mul_add(n_obj.y, c[6] * n_obj.z)),
-            c[1].mul_add(n_obj.x, c[4].mul_add(n_obj.y, c[7] * n_obj.z)),
-            c[2].mul_add(n_obj.x, c[5].mul_add(n_obj.y, c[8] * n_obj.z)),
-        );
+        let n_world = mat3_mul(&c, n_obj);
         let len2: L::F32s = n_world.dot(n_world);
         // No vertex normals (zero) or a degenerate interpolation: the geometric normal.
         let smooth = len2.gt(l.splat(1e-12));
@@ -240,13 +229,19 @@ impl Geometry {
         let ndotd = ng.dot(*dir);
         let safe = ndotd.abs().gt(l.splat(1e-8));
         let inv_nd = l.splat(1.0) / safe.select(ndotd, l.splat(1.0));
-        let transfer = |do_: Vec3s<L>, dd: Vec3s<L>| {
-            let q = dd.mul_add(t, do_);
+        // Loops, not closures: a closure called twice may stay out of line, and outside the
+        // kernel's `#[target_feature]` function every intrinsic becomes a call
+        // (`scripts/check-inlining.sh`).
+        let mut dp = [
+            (diff.dorigin_dx, diff.ddir_dx),
+            (diff.dorigin_dy, diff.ddir_dy),
+        ];
+        for d in &mut dp {
+            let q = d.1.mul_add(t, d.0);
             let k = safe.select(ng.dot(q) * inv_nd, l.splat(0.0));
-            q - *dir * k
-        };
-        let dp_dx = transfer(diff.dorigin_dx, diff.ddir_dx);
-        let dp_dy = transfer(diff.dorigin_dy, diff.ddir_dy);
+            d.0 = q - *dir * k;
+        }
+        let (dp_dx, dp_dy) = (dp[0].0, dp[1].0);
         // dp = a e1 + b e2 in the least-squares sense; then ds = a ds1 + b ds2.
         let (g11, g12, g22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
         let det = g11 * g22 - g12 * g12;
@@ -254,14 +249,14 @@ impl Geometry {
         let inv_det = l.splat(1.0) / ok.select(det, l.splat(1.0));
         let (ds1, ds2) = (st[0][1] - st[0][0], st[0][2] - st[0][0]);
         let (dt1, dt2) = (st[1][1] - st[1][0], st[1][2] - st[1][0]);
-        let uv_diff = |dp: Vec3s<L>| {
+        let mut uv_diff = [(l.splat(0.0), l.splat(0.0)); 2];
+        for (out, dp) in uv_diff.iter_mut().zip([dp_dx, dp_dy]) {
             let (r1, r2) = (e1.dot(dp), e2.dot(dp));
             let a = ok.select((g22 * r1 - g12 * r2) * inv_det, l.splat(0.0));
             let b = ok.select((g11 * r2 - g12 * r1) * inv_det, l.splat(0.0));
-            (a * ds1 + b * ds2, a * dt1 + b * dt2)
-        };
-        let (ds_dx, dt_dx) = uv_diff(dp_dx);
-        let (ds_dy, dt_dy) = uv_diff(dp_dy);
+            *out = (a * ds1 + b * ds2, a * dt1 + b * dt2);
+        }
+        let [(ds_dx, dt_dx), (ds_dy, dt_dy)] = uv_diff;
         Surface {
             active,
             p,
@@ -279,4 +274,14 @@ impl Geometry {
             material: active.select_i32(material, l.splat_i32(-1)),
         }
     }
+}
+
+/// `m v` for a column-major 3x3 matrix per lane.
+#[inline(always)]
+fn mat3_mul<L: Lanes>(m: &[L::F32s; 9], v: Vec3s<L>) -> Vec3s<L> {
+    Vec3s::new(
+        m[0].mul_add(v.x, m[3].mul_add(v.y, m[6] * v.z)),
+        m[1].mul_add(v.x, m[4].mul_add(v.y, m[7] * v.z)),
+        m[2].mul_add(v.x, m[5].mul_add(v.y, m[8] * v.z)),
+    )
 }

@@ -64,19 +64,32 @@ pub trait Accel: Send + Sync + Sized {
     /// The nearest hit per active lane; inactive and missing lanes hold [`Hits::miss`] values.
     #[inline(always)]
     fn intersect<L: Lanes>(&self, l: L, rays: &Rays<L>, active: L::Mask) -> Hits<L> {
-        Hits::from_fn(l, |i| {
-            if active.lane(i) {
-                self.intersect1(&rays.lane(i))
-            } else {
-                None
-            }
-        })
+        // Unpacked once, and the closure inlined: in a kernel's `#[target_feature]` function,
+        // code left out of line calls every intrinsic (`scripts/check-inlining.sh`).
+        let rays = rays.unpack();
+        let bits = active.bitmask();
+        Hits::from_fn(
+            l,
+            #[inline(always)]
+            |i| {
+                if bits >> i & 1 != 0 {
+                    self.intersect1(&rays[i])
+                } else {
+                    None
+                }
+            },
+        )
     }
 
     /// The active lanes that hit anything in `[tmin, tmax)`.
     #[inline(always)]
     fn occluded<L: Lanes>(&self, l: L, rays: &Rays<L>, active: L::Mask) -> L::Mask {
-        l.mask_from_fn(|i| active.lane(i) && self.occluded1(&rays.lane(i)))
+        let rays = rays.unpack();
+        let bits = active.bitmask();
+        l.mask_from_fn(
+            #[inline(always)]
+            |i| bits >> i & 1 != 0 && self.occluded1(&rays[i]),
+        )
     }
 
     /// Every hit of every active lane, passed to `f(lane, hit)` with the guarantees of

@@ -154,6 +154,7 @@ impl Accel for BruteForce {
     }
 
     /// Packet form with the packet triangle test (checks it against the single-ray test).
+    #[inline(always)]
     fn intersect<L: Lanes>(&self, l: L, rays: &Rays<L>, active: L::Mask) -> Hits<L> {
         let mut hits = Hits::miss(l);
         let active = active & rays.valid(l);
@@ -186,6 +187,7 @@ impl Accel for BruteForce {
         hits
     }
 
+    #[inline(always)]
     fn occluded<L: Lanes>(&self, l: L, rays: &Rays<L>, active: L::Mask) -> L::Mask {
         let active = active & rays.valid(l);
         let mut occ = l.splat_mask(false);

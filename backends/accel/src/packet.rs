@@ -54,21 +54,50 @@ impl<L: Lanes> Rays<L> {
         )
     }
 
+    /// Every lane as a single ray (the first `L::N` entries): one store per component, for
+    /// the packet forms built on single-ray queries.
+    #[inline(always)]
+    pub fn unpack(&self) -> [Ray1; coherent_simd::MAX_LANES] {
+        let mut c = [[0.0f32; coherent_simd::MAX_LANES]; 8];
+        let v = [
+            self.origin.x,
+            self.origin.y,
+            self.origin.z,
+            self.dir.x,
+            self.dir.y,
+            self.dir.z,
+            self.tmin,
+            self.tmax,
+        ];
+        for (out, v) in c.iter_mut().zip(v) {
+            v.store(out);
+        }
+        let mut rays = [Ray1::infinite(Vec3::ZERO, Vec3::X); coherent_simd::MAX_LANES];
+        for (i, r) in rays.iter_mut().enumerate().take(L::N) {
+            *r = Ray1::new(
+                Vec3::new(c[0][i], c[1][i], c[2][i]),
+                Vec3::new(c[3][i], c[4][i], c[5][i]),
+                c[6][i],
+                c[7][i],
+            );
+        }
+        rays
+    }
+
     /// Lanes holding a valid ray (the rule of [`Ray1::is_valid`], lane by lane).
     #[inline(always)]
     pub fn valid(&self, l: L) -> L::Mask {
         let zero = l.splat(0.0);
         let inf = l.splat(f32::INFINITY);
         // False for NaN and both infinities.
-        let finite = |v: L::F32s| v.abs().lt(inf);
         let o = &self.origin;
         let d = &self.dir;
-        finite(o.x)
-            & finite(o.y)
-            & finite(o.z)
-            & finite(d.x)
-            & finite(d.y)
-            & finite(d.z)
+        o.x.abs().lt(inf)
+            & o.y.abs().lt(inf)
+            & o.z.abs().lt(inf)
+            & d.x.abs().lt(inf)
+            & d.y.abs().lt(inf)
+            & d.z.abs().lt(inf)
             // Without FMA, as `Ray1::is_valid` computes it.
             & (d.x * d.x + d.y * d.y + d.z * d.z).gt(zero)
             & self.tmin.le(self.tmax)

@@ -102,6 +102,7 @@ impl Bsp {
     }
 
     /// [`Accel::intersect`], counting what the traversal did into `c`.
+    #[inline(always)]
     pub fn intersect_counted<L: Lanes>(
         &self,
         l: L,
@@ -118,6 +119,7 @@ impl Bsp {
     }
 
     /// [`Accel::occluded`], counting what the traversal did into `c`.
+    #[inline(always)]
     pub fn occluded_counted<L: Lanes>(
         &self,
         l: L,

@@ -100,8 +100,15 @@ fn widen_hi<L: Lanes>(l: L, x: L::F32s) -> L::F32s {
 /// Bitmasks of the lanes whose direction is negative along x, y, z.
 #[inline(always)]
 pub(crate) fn sign_bits<L: Lanes>(l: L, d: &Vec3s<L>) -> [u32; 3] {
+    // Written out, not `[..].map(closure)`: `array::map` and its closure are not always
+    // inlined, and code outside the kernel's `#[target_feature]` function calls every
+    // intrinsic out of line (`scripts/check-inlining.sh`).
     let zero = l.splat_i32(0);
-    [d.x, d.y, d.z].map(|c| c.to_bits().lt(zero).bitmask())
+    [
+        d.x.to_bits().lt(zero).bitmask(),
+        d.y.to_bits().lt(zero).bitmask(),
+        d.z.to_bits().lt(zero).bitmask(),
+    ]
 }
 
 /// Calls `f(group, signs)` for each group of the lanes `m` with equal direction signs.

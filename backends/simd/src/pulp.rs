@@ -131,7 +131,7 @@ impl<S: Simd> PF32<S> {
     #[inline(always)]
     fn has_fraction(self) -> S::m32s {
         let s = self.1;
-        s.less_than_f32s(s.abs_f32s(self.0), s.splat_f32s(TWO23))
+        s.less_than_f32s(SimdF32::abs(self).0, s.splat_f32s(TWO23))
     }
 }
 impl<S: Simd> PI32<S> {
@@ -334,7 +334,12 @@ impl<S: Simd> SimdF32 for PF32<S> {
     }
     #[inline(always)]
     fn abs(self) -> Self {
-        self.w(self.1.abs_f32s(self.0))
+        // Not pulp's `abs_f32s`: a provided trait method marked only `#[inline]`, which
+        // LLVM left out of line in the BSP traversal, where (outside the `#[target_feature]`
+        // function) each of its operations became a call.
+        let magnitude = self.1.splat_u32s(0x7fff_ffff);
+        let bits = self.1.transmute_u32s_f32s(self.0);
+        self.w(self.1.transmute_f32s_u32s(self.1.and_u32s(bits, magnitude)))
     }
     #[inline(always)]
     fn sqrt(self) -> Self {
@@ -363,7 +368,7 @@ impl<S: Simd> SimdF32 for PF32<S> {
     fn round(self) -> Self {
         // |x| + 2^23 - 2^23 rounds |x| < 2^23 to nearest even; copy the sign back (keeps -0).
         let s = self.1;
-        let a = s.abs_f32s(self.0);
+        let a = SimdF32::abs(self).0;
         let r = s.sub_f32s(s.add_f32s(a, self.splat(TWO23)), self.splat(TWO23));
         let r = self.w(r).copysign(self);
         self.w(s.select_f32s(self.has_fraction(), r.0, self.0))
