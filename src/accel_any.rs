@@ -148,6 +148,8 @@ impl AnyParams {
 }
 
 /// A built accelerator of any kind.
+// One per render, built once: the BSP's size beside the others' costs nothing.
+#[allow(clippy::large_enum_variant)]
 pub enum AnyAccel {
     Bsp(Bsp),
     #[cfg(feature = "embree")]

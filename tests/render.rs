@@ -505,7 +505,8 @@ fn every_backend_and_accelerator_renders_the_scalar_bsp_image() {
 
 #[test]
 fn the_thread_count_does_not_change_the_image() {
-    use coherent::film::{FilmOptions, Method, render};
+    use coherent::film::{FilmOptions, Method};
+    use coherent::render::render_frame;
     let sc = &lit_scenes()[0];
     let accel = AnyAccel::build(&sc.accel_scene(), &AnyParams::of(AccelKind::Bsp)).unwrap();
     let r = Renderer::new(sc, accel, W, H).unwrap();
@@ -518,7 +519,7 @@ fn the_thread_count_does_not_change_the_image() {
             .build()
             .unwrap();
         let out = pool
-            .install(|| render(backend, &r, &opts, &|_| {}))
+            .install(|| render_frame(backend, &r, &opts, &|_| {}))
             .unwrap();
         assert!(out.stats.rays(RayKind::Shadow) > 0);
         images.push(out.image());

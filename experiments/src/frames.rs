@@ -11,8 +11,8 @@ use std::time::Instant;
 use anyhow::Context;
 use coherent::accel::Accel;
 use coherent::accel_any::{AccelKind, AnyAccel, AnyParams};
-use coherent::film::{FilmOptions, Method, Rendered, render};
-use coherent::render::{RenderStats, Renderer};
+use coherent::film::{FilmOptions, Method, Rendered};
+use coherent::render::{RenderStats, Renderer, render_frame};
 use coherent::scene::RenderScene;
 use coherent::simd::Backend;
 
@@ -154,7 +154,7 @@ pub fn frame(
 ) -> anyhow::Result<(Rendered<RenderStats>, f64)> {
     let opts = FilmOptions::new(plan.width, plan.height, Method::Uniform { spp: plan.spp });
     let start = Instant::now();
-    let rendered = pool.install(|| render(backend, renderer, &opts, &|_| {}))?;
+    let rendered = pool.install(|| render_frame(backend, renderer, &opts, &|_| {}))?;
     let seconds = start.elapsed().as_secs_f64();
     Ok((std::hint::black_box(rendered), seconds))
 }

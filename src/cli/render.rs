@@ -8,8 +8,8 @@ use std::time::Instant;
 use anyhow::{Context, bail};
 use coherent::accel::Accel;
 use coherent::accel_any::{AccelKind, AnyAccel, AnyParams};
-use coherent::film::{FilmOptions, Method, PassReport, render};
-use coherent::render::{RayKind, Renderer};
+use coherent::film::{FilmOptions, Method, PassReport};
+use coherent::render::{RayKind, Renderer, render_frame};
 use coherent::simd::Backend;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -121,7 +121,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         ));
     };
     let t_render = Instant::now();
-    let rendered = pool.install(|| render(backend, &renderer, &opts, &progress))?;
+    let rendered = pool.install(|| render_frame(backend, &renderer, &opts, &progress))?;
     let seconds = t_render.elapsed();
     bar.finish_and_clear();
     rendered.write(&args.out)?;

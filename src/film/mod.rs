@@ -4,6 +4,7 @@
 //! and the tone-mapped (section 6.1) and HDR image output.
 
 mod accuracy;
+mod batch;
 mod matrix;
 mod output;
 mod render;
@@ -17,6 +18,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 pub use accuracy::display_difference;
+pub use batch::{PacketIn, PacketOut, trace_packets};
 pub use matrix::{Film, ScreenMatrix, matrix_of};
 pub use render::render;
 pub use superpixel::Superpixels;

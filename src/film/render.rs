@@ -8,8 +8,10 @@
 
 use std::time::Instant;
 
-use coherent_simd::{Backend, Kernel, Lanes, MAX_LANES, SimdF32, SimdMask};
+use coherent_simd::{Backend, BackendError, MAX_LANES};
 use rayon::prelude::*;
+
+use super::batch::{PacketIn, trace_packets};
 
 use super::matrix::Film;
 use super::superpixel::Superpixels;
@@ -137,8 +139,7 @@ pub fn render<T: SampleTracer>(
         let outs = tiles
             .par_iter()
             .map(|&(tx, ty)| {
-                backend.run(PassKernel {
-                    tracer,
+                let job = PassJob {
                     tile,
                     origin: (tx * tile.width(), ty * tile.height()),
                     width: w,
@@ -148,7 +149,8 @@ pub fn render<T: SampleTracer>(
                     span,
                     need: need.as_deref(),
                     id_base,
-                })
+                };
+                pass_tile(backend, tracer, &job)
             })
             .collect::<Result<Vec<_>, _>>()?;
 
@@ -337,8 +339,8 @@ struct TileOut<S> {
     multi_groups: u64,
 }
 
-struct PassKernel<'a, T> {
-    tracer: &'a T,
+/// One tile's share of a pass: which samples of the tile's Halton sequence it traces.
+struct PassJob<'a> {
     tile: HaltonTile,
     origin: (u32, u32),
     width: u32,
@@ -350,106 +352,104 @@ struct PassKernel<'a, T> {
     id_base: u64,
 }
 
-impl<T: SampleTracer> Kernel for PassKernel<'_, T> {
-    type Output = TileOut<T::Stats>;
-
-    #[inline(always)]
-    fn run<L: Lanes>(self, l: L) -> TileOut<T::Stats> {
-        let mut out = TileOut {
-            samples: Vec::new(),
-            rays: 0,
-            traced: 0,
-            skipped: 0,
-            stats: T::Stats::default(),
-            dist_sum: 0.0,
-            dist_n: 0,
-            dist_max: 0.0,
-            multi_groups: 0,
-        };
-        let s = self.span.value();
-        let chunk = s * L::N as u64;
-        let chunks = (self.end - self.begin).div_ceil(chunk);
-        let pixels = self.width as u64 * self.height as u64;
-        let mut xs = [0.0f32; MAX_LANES];
-        let mut ys = [0.0f32; MAX_LANES];
-        let mut ids = [0i32; MAX_LANES];
-        let mut pix = [0u32; MAX_LANES];
-        let mut knum = [0u64; MAX_LANES];
-        for c in 0..chunks {
-            let base = self.begin + c * chunk;
-            for j in 0..s {
-                // Gather the group's samples that fall on the screen.
-                let mut bits = 0u32;
-                let mut wanted = self.need.is_none();
-                for m in 0..L::N {
-                    let i = base + j + m as u64 * s;
-                    if i >= self.end {
-                        break;
-                    }
-                    let (px, py, fx, fy) = self.tile.sample(i);
-                    let (x, y) = (self.origin.0 + px, self.origin.1 + py);
-                    if x >= self.width || y >= self.height {
-                        continue;
-                    }
-                    let p = y * self.width + x;
-                    let k = self.tile.sample_number(i);
-                    xs[m] = x as f32 + fx;
-                    ys[m] = y as f32 + fy;
-                    ids[m] = (self.id_base + k * pixels + p as u64) as u32 as i32;
-                    pix[m] = p;
-                    knum[m] = k;
-                    bits |= 1 << m;
-                    if let Some(need) = self.need {
-                        wanted |= need[p as usize];
-                    }
+/// Packs a tile's samples into coherent groups of `backend`'s width (sample `i` of a group
+/// is Halton index `base + j + m * span` for lane `m`), traces them with
+/// [`trace_packets`], and files each lane's colour under its pixel and sample number.
+fn pass_tile<T: SampleTracer>(
+    backend: Backend,
+    tracer: &T,
+    job: &PassJob<'_>,
+) -> Result<TileOut<T::Stats>, BackendError> {
+    let lanes = backend.lanes();
+    let mut skipped = 0;
+    let s = job.span.value();
+    let chunk = s * lanes as u64;
+    let chunks = (job.end - job.begin).div_ceil(chunk);
+    let pixels = job.width as u64 * job.height as u64;
+    // Each packet's lanes: pixel and sample number, beside the packet itself.
+    let mut packets = Vec::new();
+    let mut where_ = Vec::new();
+    let mut cur = PacketIn::default();
+    let mut pix = [0u32; MAX_LANES];
+    let mut knum = [0u64; MAX_LANES];
+    for c in 0..chunks {
+        let base = job.begin + c * chunk;
+        for j in 0..s {
+            // Gather the group's samples that fall on the screen.
+            let mut bits = 0u32;
+            let mut wanted = job.need.is_none();
+            for m in 0..lanes {
+                let i = base + j + m as u64 * s;
+                if i >= job.end {
+                    break;
                 }
-                if bits == 0 {
+                let (px, py, fx, fy) = job.tile.sample(i);
+                let (x, y) = (job.origin.0 + px, job.origin.1 + py);
+                if x >= job.width || y >= job.height {
                     continue;
                 }
-                if !wanted {
-                    out.skipped += 1;
-                    continue;
-                }
-                let active = l.mask_from_bits(bits);
-                let rgb = self.tracer.trace(
-                    l,
-                    l.load(&xs),
-                    l.load(&ys),
-                    l.load_i32(&ids),
-                    active,
-                    &mut out.stats,
-                );
-                out.traced += 1;
-                out.rays += active.count() as u64;
-                let (mut cx, mut cy, mut n) = (0.0f64, 0.0f64, 0u32);
-                for m in 0..L::N {
-                    if bits >> m & 1 == 1 {
-                        out.samples.push((
-                            pix[m],
-                            knum[m],
-                            [rgb.r.lane(m), rgb.g.lane(m), rgb.b.lane(m)],
-                        ));
-                        cx += xs[m] as f64;
-                        cy += ys[m] as f64;
-                        n += 1;
-                    }
-                }
-                if n >= 2 {
-                    let (cx, cy) = (cx / n as f64, cy / n as f64);
-                    for m in 0..L::N {
-                        if bits >> m & 1 == 1 {
-                            let d = (xs[m] as f64 - cx).hypot(ys[m] as f64 - cy);
-                            out.dist_sum += d;
-                            out.dist_n += 1;
-                            out.dist_max = out.dist_max.max(d);
-                        }
-                    }
-                    out.multi_groups += 1;
+                let p = y * job.width + x;
+                let k = job.tile.sample_number(i);
+                cur.xs[m] = x as f32 + fx;
+                cur.ys[m] = y as f32 + fy;
+                cur.ids[m] = (job.id_base + k * pixels + p as u64) as u32 as i32;
+                pix[m] = p;
+                knum[m] = k;
+                bits |= 1 << m;
+                if let Some(need) = job.need {
+                    wanted |= need[p as usize];
                 }
             }
+            if bits == 0 {
+                continue;
+            }
+            if !wanted {
+                skipped += 1;
+                continue;
+            }
+            cur.bits = bits;
+            packets.push(cur);
+            where_.push((pix, knum));
         }
-        out
     }
+    let (colours, stats) = trace_packets(backend, tracer, &packets)?;
+    let mut out = TileOut {
+        samples: Vec::new(),
+        rays: 0,
+        traced: packets.len() as u64,
+        skipped,
+        stats,
+        dist_sum: 0.0,
+        dist_n: 0,
+        dist_max: 0.0,
+        multi_groups: 0,
+    };
+    for ((p, (pix, knum)), rgb) in packets.iter().zip(&where_).zip(&colours) {
+        let bits = p.bits;
+        out.rays += bits.count_ones() as u64;
+        let (mut cx, mut cy, mut n) = (0.0f64, 0.0f64, 0u32);
+        for m in 0..lanes {
+            if bits >> m & 1 == 1 {
+                out.samples.push((pix[m], knum[m], rgb[m]));
+                cx += p.xs[m] as f64;
+                cy += p.ys[m] as f64;
+                n += 1;
+            }
+        }
+        if n >= 2 {
+            let (cx, cy) = (cx / n as f64, cy / n as f64);
+            for m in 0..lanes {
+                if bits >> m & 1 == 1 {
+                    let d = (p.xs[m] as f64 - cx).hypot(p.ys[m] as f64 - cy);
+                    out.dist_sum += d;
+                    out.dist_n += 1;
+                    out.dist_max = out.dist_max.max(d);
+                }
+            }
+            out.multi_groups += 1;
+        }
+    }
+    Ok(out)
 }
 
 /// Traces points (the pre-render) in packets, in parallel, in order; ids are the indices.
@@ -458,17 +458,34 @@ fn trace_points<T: SampleTracer>(
     tracer: &T,
     points: &[(f32, f32)],
 ) -> Result<(Vec<[f32; 3]>, T::Stats), FilmError> {
+    let lanes = backend.lanes();
     let outs = points
         .par_chunks(POINTS_PER_TASK)
         .enumerate()
         .map(|(t, chunk)| {
-            backend.run(PointsKernel {
-                tracer,
-                points: chunk,
-                first_id: t * POINTS_PER_TASK,
-            })
+            let first_id = t * POINTS_PER_TASK;
+            let packets: Vec<PacketIn> = chunk
+                .chunks(lanes)
+                .enumerate()
+                .map(|(g, group)| {
+                    let mut p = PacketIn::default();
+                    for (m, &(x, y)) in group.iter().enumerate() {
+                        p.xs[m] = x;
+                        p.ys[m] = y;
+                        p.ids[m] = (first_id + g * lanes + m) as i32;
+                        p.bits |= 1 << m;
+                    }
+                    p
+                })
+                .collect();
+            let (colours, stats) = trace_packets(backend, tracer, &packets)?;
+            let mut out = Vec::with_capacity(chunk.len());
+            for (group, c) in chunk.chunks(lanes).zip(&colours) {
+                out.extend_from_slice(&c[..group.len()]);
+            }
+            Ok((out, stats))
         })
-        .collect::<Result<Vec<_>, _>>()?;
+        .collect::<Result<Vec<_>, BackendError>>()?;
     let mut stats = T::Stats::default();
     let mut colors = Vec::with_capacity(points.len());
     for (c, s) in outs {
@@ -476,44 +493,4 @@ fn trace_points<T: SampleTracer>(
         T::merge_stats(&mut stats, s);
     }
     Ok((colors, stats))
-}
-
-struct PointsKernel<'a, T> {
-    tracer: &'a T,
-    points: &'a [(f32, f32)],
-    first_id: usize,
-}
-
-impl<T: SampleTracer> Kernel for PointsKernel<'_, T> {
-    type Output = (Vec<[f32; 3]>, T::Stats);
-
-    #[inline(always)]
-    fn run<L: Lanes>(self, l: L) -> Self::Output {
-        let mut stats = T::Stats::default();
-        let mut colors = Vec::with_capacity(self.points.len());
-        let mut xs = [0.0f32; MAX_LANES];
-        let mut ys = [0.0f32; MAX_LANES];
-        let mut ids = [0i32; MAX_LANES];
-        for (g, group) in self.points.chunks(L::N).enumerate() {
-            let mut bits = 0u32;
-            for m in 0..group.len() {
-                xs[m] = group[m].0;
-                ys[m] = group[m].1;
-                ids[m] = (self.first_id + g * L::N + m) as i32;
-                bits |= 1 << m;
-            }
-            let rgb = self.tracer.trace(
-                l,
-                l.load(&xs),
-                l.load(&ys),
-                l.load_i32(&ids),
-                l.mask_from_bits(bits),
-                &mut stats,
-            );
-            for m in 0..group.len() {
-                colors.push([rgb.r.lane(m), rgb.g.lane(m), rgb.b.lane(m)]);
-            }
-        }
-        (colors, stats)
-    }
 }

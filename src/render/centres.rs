@@ -4,56 +4,53 @@
 //! progressive driver.
 
 use coherent_accel::Accel;
-use coherent_simd::{Backend, BackendError, Kernel, Lanes};
+use coherent_simd::{Backend, BackendError};
 
 use super::{RenderStats, Renderer};
+use crate::film::{PacketIn, trace_packets};
 
-/// Radiance at each pixel centre, row-major, `y` down, and the statistics.
-pub fn render_centres<A: Accel>(
+/// Radiance at each pixel centre, row-major, `y` down, and the statistics, with the
+/// accelerator chosen at run time. Not generic, so the renderer is compiled for every backend
+/// once, here, for all its callers (see [`super::render_frame`]).
+#[inline(never)]
+pub fn render_centres(
+    renderer: &Renderer<'_, crate::accel_any::AnyAccel>,
+    backend: Backend,
+    width: u32,
+    height: u32,
+) -> Result<(Vec<[f32; 3]>, RenderStats), BackendError> {
+    render_centres_with(renderer, backend, width, height)
+}
+
+/// [`render_centres`] for any accelerator type. The packets go through the film's
+/// [`trace_packets`], the one kernel of every image driver.
+pub fn render_centres_with<A: Accel>(
     renderer: &Renderer<'_, A>,
     backend: Backend,
     width: u32,
     height: u32,
 ) -> Result<(Vec<[f32; 3]>, RenderStats), BackendError> {
-    backend.run(Centres {
-        renderer,
-        width,
-        height,
-    })
-}
-
-struct Centres<'a, 's, A: Accel> {
-    renderer: &'a Renderer<'s, A>,
-    width: u32,
-    height: u32,
-}
-
-impl<A: Accel> Kernel for Centres<'_, '_, A> {
-    type Output = (Vec<[f32; 3]>, RenderStats);
-
-    #[inline(always)]
-    fn run<L: Lanes>(self, l: L) -> Self::Output {
-        let (w, h) = (self.width as usize, self.height as usize);
-        let mut image = vec![[0.0f32; 3]; w * h];
-        let mut stats = RenderStats::default();
-        for y in 0..h {
-            let mut x0 = 0;
-            while x0 < w {
-                let xs = l.from_fn(|i| (x0 + i) as f32 + 0.5);
-                let ys = l.splat(y as f32 + 0.5);
-                let ids = l.from_fn_i32(|i| (y * w + x0 + i) as i32);
-                let active = l.mask_from_fn(|i| x0 + i < w);
-                let c = self
-                    .renderer
-                    .trace_packet(l, xs, ys, ids, active, &mut stats);
-                for i in 0..L::N.min(w - x0) {
-                    image[y * w + x0 + i] = c.lane(i);
-                }
-                x0 += L::N;
+    let (w, h) = (width as usize, height as usize);
+    let lanes = backend.lanes();
+    let mut packets = Vec::with_capacity(h * w.div_ceil(lanes));
+    for y in 0..h {
+        for x0 in (0..w).step_by(lanes) {
+            let mut p = PacketIn::default();
+            for m in 0..lanes.min(w - x0) {
+                p.xs[m] = (x0 + m) as f32 + 0.5;
+                p.ys[m] = y as f32 + 0.5;
+                p.ids[m] = (y * w + x0 + m) as i32;
+                p.bits |= 1 << m;
             }
+            packets.push(p);
         }
-        (image, stats)
     }
+    let (colours, stats) = trace_packets(backend, renderer, &packets)?;
+    let mut image = Vec::with_capacity(w * h);
+    for (p, c) in packets.iter().zip(&colours) {
+        image.extend_from_slice(&c[..p.bits.count_ones() as usize]);
+    }
+    Ok((image, stats))
 }
 
 /// PSNR in dB of `a` against the reference `b` with peak `peak` (infinite when identical).

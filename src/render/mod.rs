@@ -263,14 +263,16 @@ impl<'s, A: Accel> Renderer<'s, A> {
             return;
         }
         let eps = (surf.p.x.abs().max(surf.p.y.abs()).max(surf.p.z.abs()) + 1.0) * 1e-4;
-        let positive = |c: Rgbs<L>| c.r.max(c.g).max(c.b).gt(zero);
+        // No closures here: one called twice may stay out of line, and outside the kernel's
+        // `#[target_feature]` function every intrinsic becomes a call
+        // (`scripts/check-inlining.sh`).
+        let (rw, tw) = (&base.reflection, &base.refraction);
 
         // The mirror reflection packet.
-        let refl_on = hit & positive(base.reflection);
+        let refl_on = hit & rw.r.max(rw.g).max(rw.b).gt(zero);
         if refl_on.any() {
             let r = dir - ns * (dir.dot(ns) * 2.0);
             let side = ng.dot(r).lt(zero).select(-eps, eps);
-            let reflect = |d: Vec3s<L>| d - ns * (d.dot(ns) * 2.0);
             pending.push(Segment {
                 rays: Rays {
                     origin: ng.mul_add(side, surf.p),
@@ -281,8 +283,8 @@ impl<'s, A: Accel> Renderer<'s, A> {
                 diff: Differentials {
                     dorigin_dx: surf.dp_dx,
                     dorigin_dy: surf.dp_dy,
-                    ddir_dx: reflect(seg.diff.ddir_dx),
-                    ddir_dy: reflect(seg.diff.ddir_dy),
+                    ddir_dx: seg.diff.ddir_dx - ns * (seg.diff.ddir_dx.dot(ns) * 2.0),
+                    ddir_dy: seg.diff.ddir_dy - ns * (seg.diff.ddir_dy.dot(ns) * 2.0),
                 },
                 active: refl_on,
                 throughput: seg.throughput * base.reflection,
@@ -294,7 +296,7 @@ impl<'s, A: Accel> Renderer<'s, A> {
 
         // The refraction packet (Snell's law; lanes past the critical angle are dropped:
         // their energy went to the reflection weight through the Fresnel factor).
-        let refr_on = hit & positive(base.refraction);
+        let refr_on = hit & tw.r.max(tw.g).max(tw.b).gt(zero);
         if refr_on.any() {
             let ior = l.gather(&self.ior, surf.material.max(l.splat_i32(0)));
             let (t_dir, inv_eta, tir) = refract(l, &dir, &ns, ior);
@@ -395,6 +397,23 @@ pub fn refract<L: Lanes>(
     let cos_t = (one - sin2_t).max(zero).sqrt();
     let t_dir = *dir * inv_eta + n_in * (cos_i * inv_eta - cos_t);
     (t_dir, inv_eta, tir)
+}
+
+/// Renders a frame through the film (`coherent render`'s path: samples, passes, adaptive
+/// anti-aliasing) with the accelerator chosen at run time, in the current rayon pool.
+///
+/// [`crate::film::render`] with `Renderer<AnyAccel>`, but not generic: the renderer is
+/// monomorphised for every backend once, in this crate, and the command line, the experiments
+/// and the tests link to that one copy instead of each compiling its own (the renderer times
+/// nine backends is most of the project's build time).
+#[inline(never)]
+pub fn render_frame(
+    backend: coherent_simd::Backend,
+    renderer: &Renderer<'_, crate::accel_any::AnyAccel>,
+    opts: &crate::film::FilmOptions,
+    progress: &(dyn Fn(&crate::film::PassReport) + Sync),
+) -> Result<crate::film::Rendered<RenderStats>, crate::film::FilmError> {
+    crate::film::render(backend, renderer, opts, progress)
 }
 
 impl<A: Accel> crate::film::SampleTracer for Renderer<'_, A> {
