@@ -40,6 +40,7 @@ use std::collections::BTreeMap;
 use coherent::accel::scenes::{self, BuiltinScene, SceneSize};
 use coherent::accel::workload::{self, Clock, PassResult, RayKind, TimePackets};
 use coherent::accel::{Accel, Ray1, Rays};
+use coherent::accel_any::{AccelKind, AnyAccel};
 use coherent::bsp::{Bsp, BspParams, TraversalStats};
 use coherent::mesh_file::REAL_MESHES;
 use coherent::simd::{Backend, Kernel, Lanes};
@@ -247,81 +248,36 @@ fn embree_pass<const K: usize>(
     }
 }
 
-/// One of the other accelerators, built.
-enum Built {
-    #[cfg(feature = "embree")]
-    Embree(coherent::embree::Embree),
-    #[cfg(feature = "obvhs")]
-    Obvhs(coherent::obvhs::Obvhs),
-    /// No other accelerator compiled in.
-    #[cfg(not(any(feature = "embree", feature = "obvhs")))]
-    #[allow(dead_code)]
-    None(std::convert::Infallible),
+/// The settings that depend on the kind of rays (Embree's COHERENT flag).
+fn prepare(a: &mut AnyAccel, kind: RayKind) {
+    a.set_coherent(kind != RayKind::Diffuse);
 }
 
-impl Built {
-    fn name(&self) -> &'static str {
-        match self {
-            #[cfg(feature = "embree")]
-            Built::Embree(a) => a.name(),
-            #[cfg(feature = "obvhs")]
-            Built::Obvhs(a) => a.name(),
-            #[cfg(not(any(feature = "embree", feature = "obvhs")))]
-            Built::None(never) => match *never {},
-        }
-    }
+/// Whether the accelerator has a packet traversal of its own (obvhs has not: its packet
+/// rows would time the single-ray fallback).
+fn has_packets(a: &AnyAccel) -> bool {
+    a.kind() != AccelKind::Obvhs
+}
 
-    /// Whether it has packet traversal (obvhs has not).
-    fn packets(&self) -> bool {
-        match self {
-            #[cfg(feature = "embree")]
-            Built::Embree(_) => true,
-            #[cfg(feature = "obvhs")]
-            Built::Obvhs(_) => false,
-            #[cfg(not(any(feature = "embree", feature = "obvhs")))]
-            Built::None(never) => match *never {},
-        }
-    }
-
-    fn memory_bytes(&self) -> usize {
-        match self {
-            #[cfg(feature = "embree")]
-            Built::Embree(a) => a.memory_bytes(),
-            #[cfg(feature = "obvhs")]
-            Built::Obvhs(a) => a.memory_bytes(),
-            #[cfg(not(any(feature = "embree", feature = "obvhs")))]
-            Built::None(never) => match *never {},
-        }
-    }
-
-    /// Settings that depend on the kind of rays (Embree's COHERENT flag).
-    fn prepare(&mut self, kind: RayKind) {
+/// One timed pass over `rays`, single rays (`None`) or packets of `backend`'s width, on the
+/// concrete accelerator inside the [`AnyAccel`] (the `match` is outside the timed loop).
+#[cfg_attr(
+    not(any(feature = "embree", feature = "obvhs")),
+    allow(unused_variables)
+)]
+fn pass_of(
+    a: &AnyAccel,
+    rays: &[Ray1],
+    kind: RayKind,
+    backend: Option<Backend>,
+) -> anyhow::Result<PassResult> {
+    match a {
+        AnyAccel::Bsp(a) => pass_any(a, rays, kind.occlusion(), backend),
         #[cfg(feature = "embree")]
-        if let Built::Embree(a) = self {
-            a.set_coherent(kind != RayKind::Diffuse);
-        }
-        let _ = kind;
-    }
-
-    /// One timed pass over `rays`: single rays (`None`) or packets of `backend`'s width.
-    #[cfg_attr(
-        not(any(feature = "embree", feature = "obvhs")),
-        allow(unused_variables)
-    )]
-    fn pass(
-        &self,
-        rays: &[Ray1],
-        kind: RayKind,
-        backend: Option<Backend>,
-    ) -> anyhow::Result<PassResult> {
-        match self {
-            #[cfg(feature = "embree")]
-            Built::Embree(a) => pass_any(a, rays, kind.occlusion(), backend),
-            #[cfg(feature = "obvhs")]
-            Built::Obvhs(a) => pass_any(a, rays, kind.occlusion(), backend),
-            #[cfg(not(any(feature = "embree", feature = "obvhs")))]
-            Built::None(never) => match *never {},
-        }
+        AnyAccel::Embree(a) => pass_any(a, rays, kind.occlusion(), backend),
+        #[cfg(feature = "obvhs")]
+        AnyAccel::Obvhs(a) => pass_any(a, rays, kind.occlusion(), backend),
+        AnyAccel::Brute(_) => anyhow::bail!("brute force is a test reference, not timed"),
     }
 }
 
@@ -360,13 +316,13 @@ fn embree_params() -> coherent::embree::EmbreeParams {
     not(any(feature = "embree", feature = "obvhs")),
     allow(unused_mut, unused_variables)
 )]
-fn build_others(ctx: &mut Ctx, s: &BuiltinScene, repeats: usize) -> Vec<(Built, f64)> {
+fn build_others(ctx: &mut Ctx, s: &BuiltinScene, repeats: usize) -> Vec<(AnyAccel, f64)> {
     let mut out = Vec::new();
     #[cfg(feature = "embree")]
     {
         use coherent::embree::Embree;
         match build_timed::<Embree>(&s.scene, &embree_params(), repeats) {
-            Ok((e, ms)) => out.push((Built::Embree(e), ms)),
+            Ok((e, ms)) => out.push((AnyAccel::Embree(e), ms)),
             Err(e) => ctx.note(format!("accel: embree left out of scene {}: {e}", s.name)),
         }
     }
@@ -376,7 +332,7 @@ fn build_others(ctx: &mut Ctx, s: &BuiltinScene, repeats: usize) -> Vec<(Built, 
     {
         use coherent::obvhs::Obvhs;
         match build_timed::<Obvhs>(&s.scene, &Default::default(), repeats) {
-            Ok((o, ms)) => out.push((Built::Obvhs(o), ms)),
+            Ok((o, ms)) => out.push((AnyAccel::Obvhs(o), ms)),
             Err(e) => ctx.note(format!("accel: obvhs left out of scene {}: {e}", s.name)),
         }
     }
@@ -402,7 +358,7 @@ fn scene_list(ctx: &mut Ctx, size: SceneSize) -> Vec<BuiltinScene> {
     list
 }
 
-#[allow(clippy::single_match)] // matches over `Built`, whose other variants come and go with features
+#[allow(clippy::single_match)] // matches over `AnyAccel`, whose variants come and go with features
 fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     let size = ctx.pick(SceneSize::Quick, SceneSize::Full);
     let (w, h) = ctx.pick((256, 192), (1024, 768));
@@ -428,7 +384,7 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
                 .map(|&(wd, _)| rays(s, &bsp, kind, w, h, wd))
                 .collect();
             for (o, _) in &mut others {
-                o.prepare(kind);
+                prepare(o, kind);
             }
             // Embree's own packets of every packet width, packed before timing.
             #[cfg(feature = "embree")]
@@ -437,7 +393,7 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
                 .enumerate()
                 .map(|(i, &(wd, _))| {
                     others.iter().find_map(|(o, _)| match o {
-                        Built::Embree(e) => EmbreePackets::new(e, &sets[i], wd),
+                        AnyAccel::Embree(e) => EmbreePackets::new(e, &sets[i], wd),
                         #[allow(unreachable_patterns)]
                         _ => None,
                     })
@@ -449,14 +405,14 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
                 (0..widths.len()).map(|i| (Who::Bsp, i)).collect();
             for (k, (o, _)) in others.iter().enumerate() {
                 for (i, &(wd, _)) in widths.iter().enumerate() {
-                    if wd == 1 || o.packets() {
+                    if wd == 1 || has_packets(o) {
                         variants.push((Who::Other(k), i));
                     }
                 }
             }
             #[cfg(feature = "embree")]
             for (k, (o, _)) in others.iter().enumerate() {
-                if let Built::Embree(_) = o {
+                if let AnyAccel::Embree(_) = o {
                     for (i, &(wd, _)) in widths.iter().enumerate() {
                         if wd > 1 {
                             variants.push((Who::EmbreePlain(k), i));
@@ -473,19 +429,19 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
                     #[cfg(feature = "embree")]
                     Who::Other(k) => match (&others[k].0, &mut packed[i]) {
                         // Embree's packet rows: its own packets, packed before timing.
-                        (Built::Embree(e), Some(p)) => Ok(p.pass(e, occ, false)),
-                        (o, _) => o.pass(&sets[i], kind, widths[i].1),
+                        (AnyAccel::Embree(e), Some(p)) => Ok(p.pass(e, occ, false)),
+                        (o, _) => pass_of(o, &sets[i], kind, widths[i].1),
                     },
                     #[cfg(not(feature = "embree"))]
-                    Who::Other(k) => others[k].0.pass(&sets[i], kind, widths[i].1),
+                    Who::Other(k) => pass_of(&others[k].0, &sets[i], kind, widths[i].1),
                     #[cfg(feature = "embree")]
                     Who::EmbreePlain(k) => match (&others[k].0, &mut packed[i]) {
-                        (Built::Embree(e), Some(p)) => Ok(p.pass(e, occ, true)),
+                        (AnyAccel::Embree(e), Some(p)) => Ok(p.pass(e, occ, true)),
                         _ => Ok(PassResult::default()),
                     },
                     #[cfg(feature = "embree")]
                     Who::EmbreeTrait(k) => match &others[k].0 {
-                        Built::Embree(e) => pass_any(e, &sets[i], occ, widths[i].1),
+                        AnyAccel::Embree(e) => pass_any(e, &sets[i], occ, widths[i].1),
                         #[allow(unreachable_patterns)]
                         _ => Ok(PassResult::default()),
                     },
@@ -579,7 +535,7 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
                 if wd == 1 {
                     for (o, _) in &others {
                         match o {
-                            Built::Obvhs(o) => {
+                            AnyAccel::Obvhs(o) => {
                                 let t: u64 =
                                     sets[i].iter().map(|r| o.triangle_tests1(r, occ)).sum();
                                 bvh = format!("{:.3}", t as f64 / n);
