@@ -33,6 +33,14 @@ impl Kernel for ApproxKernel<'_> {
                 #[inline(always)]
                 |x, y| Approx::Exp.eval(l, x, y),
             ),
+            Approx::ExpPoly => map_packets(
+                l,
+                self.a,
+                self.b,
+                self.out,
+                #[inline(always)]
+                |x, y| Approx::ExpPoly.eval(l, x, y),
+            ),
             Approx::Log => map_packets(
                 l,
                 self.a,

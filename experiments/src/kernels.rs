@@ -39,6 +39,7 @@ pub const EXPERIMENT: Experiment = Experiment {
         "kernels_speedup_vs_lanes",
         "kernels_speedup",
         "portability_exp",
+        "portability_exp_poly",
         "portability_log",
         "portability_pow",
         "portability_acos",
@@ -313,8 +314,9 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
 const BDF_KERNEL: &str = "bdf_anisotropic";
 
 /// The kernels of the portability table and plots (`portability_<kernel>`).
-const PORTABILITY_KERNELS: [&str; 7] = [
+const PORTABILITY_KERNELS: [&str; 8] = [
     "exp",
+    "exp_poly",
     "log",
     "pow",
     "acos",

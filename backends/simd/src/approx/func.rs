@@ -2,9 +2,9 @@
 //! table that the tests sweep and the `kernels` experiment times, so both see the same set.
 
 use super::{
-    ACOS_MAX_ABS_ERROR, ATAN_MAX_ABS_ERROR, EXP_MAX_REL_ERROR, LOG_MAX_ABS_ERROR,
-    POW_MAX_REL_ERROR, PowRange, acos, asin, atan, atan2, cos_spot, cos_spot_max_abs_error, exp,
-    log,
+    ACOS_MAX_ABS_ERROR, ATAN_MAX_ABS_ERROR, EXP_MAX_REL_ERROR, EXP_POLY_MAX,
+    EXP_POLY_MAX_REL_ERROR, EXP_POLY_MIN, LOG_MAX_ABS_ERROR, POW_MAX_REL_ERROR, PowRange, acos,
+    asin, atan, atan2, cos_spot, cos_spot_max_abs_error, exp, exp_poly, log,
 };
 use crate::lanes::Lanes;
 
@@ -12,6 +12,8 @@ use crate::lanes::Lanes;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Approx {
     Exp,
+    /// `e^x` by range reduction and a polynomial ([`super::exp_poly`]), beside the paper's.
+    ExpPoly,
     Log,
     /// `x^(1/2.2)` over [0, 64] through [`PowRange`]: the display transform of tone mapping.
     Pow,
@@ -38,8 +40,9 @@ pub const POW_MAX: f32 = 64.0;
 
 impl Approx {
     /// Every approximation.
-    pub const ALL: [Approx; 8] = [
+    pub const ALL: [Approx; 9] = [
         Approx::Exp,
+        Approx::ExpPoly,
         Approx::Log,
         Approx::Pow,
         Approx::Acos,
@@ -48,9 +51,11 @@ impl Approx {
         Approx::Atan2,
         Approx::CosSpot,
     ];
-    /// The kernels the `kernels` experiment times (issue 2): exp, log, pow, acos, atan2.
-    pub const TIMED: [Approx; 5] = [
+    /// The kernels the `kernels` experiment times: the paper's exp, log, pow, acos, atan2,
+    /// and the polynomial exp beside its exp.
+    pub const TIMED: [Approx; 6] = [
         Approx::Exp,
+        Approx::ExpPoly,
         Approx::Log,
         Approx::Pow,
         Approx::Acos,
@@ -60,6 +65,7 @@ impl Approx {
     pub fn name(self) -> &'static str {
         match self {
             Approx::Exp => "exp",
+            Approx::ExpPoly => "exp_poly",
             Approx::Log => "log",
             Approx::Pow => "pow",
             Approx::Acos => "acos",
@@ -80,6 +86,7 @@ impl Approx {
     pub fn domain(self) -> (f32, f32) {
         match self {
             Approx::Exp => (-14.0, 14.0),
+            Approx::ExpPoly => (EXP_POLY_MIN, EXP_POLY_MAX),
             Approx::Log => (1e-30, 1e30),
             Approx::Pow => (0.0, POW_MAX),
             Approx::Acos | Approx::Asin => (-1.0, 1.0),
@@ -93,6 +100,7 @@ impl Approx {
     pub fn bound(self, x: f32) -> Bound {
         match self {
             Approx::Exp => Bound::Relative(EXP_MAX_REL_ERROR),
+            Approx::ExpPoly => Bound::Relative(EXP_POLY_MAX_REL_ERROR),
             Approx::Log => Bound::Absolute(LOG_MAX_ABS_ERROR),
             Approx::Pow => Bound::Relative(POW_MAX_REL_ERROR),
             Approx::Acos | Approx::Asin => Bound::Absolute(ACOS_MAX_ABS_ERROR),
@@ -105,7 +113,7 @@ impl Approx {
     pub fn reference(self, a: f32, b: f32) -> f64 {
         let (a, b) = (a as f64, b as f64);
         match self {
-            Approx::Exp => a.exp(),
+            Approx::Exp | Approx::ExpPoly => a.exp(),
             Approx::Log => a.ln(),
             Approx::Pow => a.powf(POW_Y as f64),
             Approx::Acos => a.acos(),
@@ -121,6 +129,7 @@ impl Approx {
     pub fn eval<L: Lanes>(self, l: L, a: L::F32s, b: L::F32s) -> L::F32s {
         match self {
             Approx::Exp => exp(l, a),
+            Approx::ExpPoly => exp_poly(l, a),
             Approx::Log => log(l, a),
             Approx::Pow => PowRange::new(POW_Y, POW_MAX)
                 .expect("constant range")

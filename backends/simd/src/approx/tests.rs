@@ -76,7 +76,13 @@ fn dense_sweeps_within_bounds_on_every_backend() {
 #[test]
 fn bounds_are_tight() {
     // A bound far above the measured error would be a test that cannot fail.
-    for f in [Approx::Exp, Approx::Log, Approx::Acos, Approx::Atan2] {
+    for f in [
+        Approx::Exp,
+        Approx::ExpPoly,
+        Approx::Log,
+        Approx::Acos,
+        Approx::Atan2,
+    ] {
         let (a, b) = sweep(f, 100_003);
         let got = eval(Backend::Scalar, f, &a, &b);
         let (ratio, _, _) = worst(f, &a, &b, &got);
@@ -121,6 +127,16 @@ fn outside_the_domains_as_documented() {
         assert_eq!(e(15.0), f32::INFINITY);
         assert_eq!(e(f32::INFINITY), f32::INFINITY);
         assert!(e(f32::NAN).is_nan());
+
+        let ep = |x| one(bk, Approx::ExpPoly, x, 0.0);
+        assert_eq!(ep(0.0), 1.0);
+        assert_eq!(ep(1.0), core::f32::consts::E);
+        assert_eq!(ep(-87.5), 0.0);
+        assert_eq!(ep(f32::NEG_INFINITY), 0.0);
+        assert_eq!(ep(88.5), f32::INFINITY);
+        assert_eq!(ep(f32::INFINITY), f32::INFINITY);
+        assert!(ep(f32::NAN).is_nan());
+        assert!(ep(88.0).is_finite() && ep(-87.0) > 0.0);
 
         let lg = |x| one(bk, Approx::Log, x, 0.0);
         assert_eq!(lg(1.0), 0.0);
