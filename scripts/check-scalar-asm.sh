@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Checks that the scalar baseline is really scalar and calls no library math: disassembles the
-# release build of every timed scalar loop (`coherent::kernels::scalar_baseline` for the
+# release build (the library as `reproduce` links it) of every timed scalar loop (`coherent::kernels::scalar_baseline` for the
 # approximations, `coherent::bdf::workload::scalar_baseline_bdf` for Table 1's BDF and
 # `coherent::texture::workload::scalar_baseline_texture` for the texture lookups: the same
 # generic code `reproduce` times, monomorphised for the scalar backend) and fails if
@@ -13,20 +13,36 @@
 #   call in the scalar baseline alone would inflate every speedup over it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo rustc --release --quiet --lib -p coherent -- --emit asm=target/scalar-baseline.s
-python3 - target/scalar-baseline.s <<'EOF'
+# The library as `reproduce` links it (the same build, so this check costs no compilation of
+# its own once `reproduce` is built): its object code, disassembled with relocations.
+rlib=$(cargo build --release -p coherent-experiments --message-format=json 2>/dev/null |
+    python3 -c '
+import json, sys
+for line in sys.stdin:
+    m = json.loads(line)
+    if m.get("reason") == "compiler-artifact" and m["target"]["name"] == "coherent" \
+            and "lib" in m["target"]["kind"]:
+        print(*[f for f in m["filenames"] if f.endswith(".rlib")])
+')
+if [[ -z "$rlib" ]]; then
+    echo "check-scalar-asm: building the release library failed:" >&2
+    cargo build --release -p coherent-experiments >&2
+    exit 1
+fi
+objdump -dr --no-show-raw-insn "$rlib" >target/scalar-baseline.dis 2>/dev/null
+python3 - target/scalar-baseline.dis <<'EOF'
 import re, sys
 
-text = open(sys.argv[1]).read().split("\n")
+# objdump -dr: `0000... <symbol>:` opens a function; a call's target is on the instruction
+# (`call 1234 <symbol>`) or, unresolved in an object file, on the relocation line after it.
 bodies, cur = {}, None
-for line in text:
-    m = re.match(r"^([A-Za-z0-9_$.]+):", line)
-    if m and not m.group(1).startswith(".L"):
+head_re = re.compile(r"^[0-9a-f]+ <([^>]+)>:$")
+for line in open(sys.argv[1]).read().split("\n"):
+    m = head_re.match(line)
+    if m:
         cur = m.group(1)
         bodies[cur] = []
-    elif line.startswith(".Lfunc_end"):
-        cur = None
-    elif cur is not None:
+    elif cur is not None and line.strip():
         bodies[cur].append(line)
 
 roots = sorted(s for s in bodies if re.search(r"scalar_baseline(_bdf|_texture)?17h", s))
@@ -45,7 +61,25 @@ libm = {
     "asinf", "acosf", "atanf", "atan2f", "sqrtf", "fmaf", "fmodf", "hypotf", "cbrtf",
     "floor", "ceil", "round", "trunc", "exp", "log", "pow", "sqrt", "fma",
 }
-call_re = re.compile(r"\b(?:call|jmp)[a-z]*\s+\*?([A-Za-z0-9_$.]+)(@PLT)?")
+insn_target_re = re.compile(r"\b(?:call|jmp)[a-z]*\s+[0-9a-f]+ <([^>+]+)>")
+reloc_re = re.compile(r"R_X86_64_(?:PLT32|PC32|GOTPCRELX?|REX_GOTPCRELX)\s+([^\s+-]+)")
+
+
+def targets(body):
+    """The functions a body calls or tail-calls."""
+    after_call = False
+    for l in body:
+        if after_call:
+            m = reloc_re.search(l)
+            if m:
+                yield m.group(1).removesuffix("@plt")
+                after_call = False
+                continue
+        m = insn_target_re.search(l)
+        if m:
+            yield m.group(1).removesuffix("@plt")
+        after_call = bool(re.search(r"\s(call|jmp)[a-z]*\s", l)) and m is None
+
 
 for root in roots:
     body = bodies[root]
@@ -54,11 +88,7 @@ for root in roots:
     # Every function of this build reachable by calls from the loop.
     seen, todo, calls = {root}, [root], set()
     while todo:
-        for l in bodies[todo.pop()]:
-            m = call_re.search(l)
-            if not m:
-                continue
-            target = m.group(1)
+        for target in targets(bodies[todo.pop()]):
             if target in bodies and target not in seen:
                 seen.add(target)
                 todo.append(target)
