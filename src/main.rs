@@ -26,7 +26,8 @@ enum Command {
     /// mesh file (framed by a default camera and light). The image is the same for any
     /// thread count; backends and accelerators differ only in rounding.
     Render(RenderArgs),
-    /// List the built-in scenes.
+    /// List the built-in scenes and the scene files of the repository's `scenes/` folder
+    /// (or `$COHERENT_SCENES`).
     Scenes,
     /// Show the CPU and its SIMD features, how this binary was built, and which lane backends
     /// are compiled in and usable here.
@@ -117,8 +118,39 @@ fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
 /// `coherent scenes`.
 fn scenes() -> anyhow::Result<()> {
     let mut out = io::stdout().lock();
+    writeln!(out, "Built in (`coherent render NAME`):")?;
     for (name, about) in coherent::scene::builtin_names() {
-        writeln!(out, "{name:<10} {about}")?;
+        writeln!(out, "  {name:<12} {about}")?;
+    }
+    // The scene files of the repository this binary was built from (real scenes: their
+    // assets come from `python3 scripts/native.py`).
+    let dir = match std::env::var_os("COHERENT_SCENES") {
+        Some(d) => std::path::PathBuf::from(d),
+        None => std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes"),
+    };
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .map(|d| d.filter_map(|e| e.ok().map(|e| e.path())).collect())
+        .unwrap_or_default();
+    files.retain(|p| p.extension().is_some_and(|e| e == "toml"));
+    files.sort();
+    if !files.is_empty() {
+        writeln!(
+            out,
+            "Scene files in {} (`coherent render FILE`):",
+            dir.display()
+        )?;
+        for f in files {
+            // The first comment line says what the scene is.
+            let about = std::fs::read_to_string(&f)
+                .ok()
+                .and_then(|t| {
+                    t.lines()
+                        .find_map(|l| l.strip_prefix('#').map(|c| c.trim().to_owned()))
+                })
+                .unwrap_or_default();
+            let name = f.file_name().unwrap_or_default().to_string_lossy();
+            writeln!(out, "  {name:<16} {about}")?;
+        }
     }
     out.flush()?;
     Ok(())

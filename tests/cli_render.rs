@@ -20,13 +20,21 @@ fn text(o: &Output) -> String {
 }
 
 #[test]
-fn scenes_lists_the_built_in_scenes() {
+fn scenes_lists_the_built_in_scenes_and_the_scene_files() {
     let out = coherent(&["scenes"]);
     assert!(out.status.success(), "{}", text(&out));
     let listed = String::from_utf8_lossy(&out.stdout);
-    for name in ["car", "spdemo", "glass1", "room2", "cornell"] {
+    for name in [
+        "car",
+        "spdemo",
+        "glass1",
+        "room2",
+        "cornell",
+        "engine.toml",
+        "bunny.toml",
+    ] {
         assert!(
-            listed.lines().any(|l| l.starts_with(name)),
+            listed.lines().any(|l| l.trim_start().starts_with(name)),
             "{name} missing from:\n{listed}"
         );
     }
