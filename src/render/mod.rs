@@ -404,8 +404,8 @@ pub fn refract<L: Lanes>(
 ///
 /// [`crate::film::render`] with `Renderer<AnyAccel>`, but not generic: the renderer is
 /// monomorphised for every backend once, in this crate, and the command line, the experiments
-/// and the tests link to that one copy instead of each compiling its own (the renderer times
-/// nine backends is most of the project's build time).
+/// and the tests link to that one copy instead of each compiling its own (the renderer,
+/// compiled for nine backends, is most of the project's build time).
 #[inline(never)]
 pub fn render_frame(
     backend: coherent_simd::Backend,
