@@ -678,7 +678,7 @@ fn record_embree(ctx: &mut Ctx) {
         return;
     }
     let native = ctx.machine.rustflags.contains("target-cpu=native");
-    #[cfg_attr(not(feature = "embree"), allow(unused_mut))]
+    #[cfg_attr(not(feature = "embree"), allow(unused_mut, clippy::useless_vec))]
     let mut extra = vec![format!(
         "\"build\": \"{}\"",
         if native { "native" } else { "portable" }
