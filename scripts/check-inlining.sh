@@ -6,8 +6,8 @@
 # vectors to memory: a packet loop slower than the scalar one, and no compiler warning.
 #
 # This script finds such code in a release binary: every function, other than the intrinsics
-# themselves, that calls an out-of-line AVX/AVX2/FMA/AVX-512 intrinsic of `core::arch`. It
-# fails, listing them with their call counts, if there is any.
+# themselves, that calls (or tail-calls) an out-of-line AVX/AVX2/FMA/AVX-512 intrinsic of
+# `core::arch`. It fails, listing them with their call counts, if there is any.
 # Usage: scripts/check-inlining.sh [BINARY]   (default: target/release/reproduce, built by
 # `scripts/reproduce.sh`; `cargo build --release -p coherent-experiments` builds it alone)
 set -euo pipefail
@@ -29,7 +29,7 @@ report=$(objdump -d --no-show-raw-insn -C "$bin" | awk '
         intrinsic = (fn ~ /^core::core_arch::/)
         next
     }
-    !intrinsic && /call/ && /core::core_arch::x86(_64)?::(avx|avx2|fma|avx512[a-z]*|f16c|bmi[12])::/ {
+    !intrinsic && /(call|jmp)/ && /core::core_arch::x86(_64)?::(avx|avx2|fma|avx512[a-z]*|f16c|bmi[12])::/ {
         calls[fn]++
     }
     END { for (f in calls) printf "%6d  %s\n", calls[f], f }
@@ -40,7 +40,7 @@ if [[ -n "$report" ]]; then
     echo "check-inlining: $n function(s) in $bin call AVX intrinsics out of line (calls, function):"
     echo "$report"
     echo "Inline them into the kernel (#[inline(always)] functions; no closures called twice," \
-        "no array::map over lanes; see the README's 'SIMD code and inlining')." >&2
+        "no array::map over lanes; see 'Kernels inside pulp must inline' in the README)." >&2
     exit 1
 fi
 echo "check-inlining: no out-of-line AVX intrinsic calls in $bin"

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Checks that the scalar baseline is really scalar and calls no library math: disassembles the
-# release build (the library as `reproduce` links it) of every timed scalar loop (`coherent::kernels::scalar_baseline` for the
-# approximations, `coherent::bdf::workload::scalar_baseline_bdf` for Table 1's BDF and
+# release build (the library as `reproduce` links it) of every timed scalar loop
+# (`coherent::kernels::scalar_baseline` for the approximations,
+# `coherent::bdf::workload::scalar_baseline_bdf` for Table 1's BDF and
 # `coherent::texture::workload::scalar_baseline_texture` for the texture lookups: the same
 # generic code `reproduce` times, monomorphised for the scalar backend) and fails if
 # - the approximations' loop holds packed floating-point arithmetic (LLVM's loop vectoriser

@@ -124,10 +124,7 @@ fn scenes() -> anyhow::Result<()> {
     }
     // The scene files of the repository this binary was built from (real scenes: their
     // assets come from `python3 scripts/native.py`).
-    let dir = match std::env::var_os("COHERENT_SCENES") {
-        Some(d) => std::path::PathBuf::from(d),
-        None => std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes"),
-    };
+    let dir = coherent::scene::scenes_dir();
     let mut files: Vec<_> = std::fs::read_dir(&dir)
         .map(|d| d.filter_map(|e| e.ok().map(|e| e.path())).collect())
         .unwrap_or_default();

@@ -5,7 +5,7 @@
 //! `coherent render` (the progressive film with a fixed number of samples per pixel, in a
 //! rayon pool of T threads).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Context;
@@ -16,13 +16,7 @@ use coherent::render::{RenderStats, Renderer, render_frame};
 use coherent::scene::RenderScene;
 use coherent::simd::Backend;
 
-/// The scene files' folder: `$COHERENT_SCENES` if set, else the repository's `scenes/`.
-pub fn scenes_dir() -> PathBuf {
-    match std::env::var_os("COHERENT_SCENES") {
-        Some(d) => PathBuf::from(d),
-        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes"),
-    }
-}
+pub use coherent::scene::scenes_dir;
 
 /// Which scenes an experiment renders and how.
 #[derive(Clone, Debug)]

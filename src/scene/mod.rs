@@ -219,6 +219,16 @@ pub fn load(spec: &str) -> Result<RenderScene, SceneError> {
     Ok(scene)
 }
 
+/// The folder of the repository's scene files (`scenes/*.toml`): `$COHERENT_SCENES` if set,
+/// else the `scenes/` folder of the source tree this crate was built from (`coherent scenes`
+/// lists it; `table3` and `table5` render it).
+pub fn scenes_dir() -> std::path::PathBuf {
+    match std::env::var_os("COHERENT_SCENES") {
+        Some(d) => std::path::PathBuf::from(d),
+        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes"),
+    }
+}
+
 /// (name, one-line description) of every built-in scene, for `coherent scenes`.
 pub fn builtin_names() -> Vec<(&'static str, &'static str)> {
     builtin::NAMES.to_vec()
