@@ -7,7 +7,8 @@
 //! cargo run --release -p coherent-bsp --example trace -- [SCENE] [quick|full] [WxH] [THRESHOLD]
 //! SCENE: spheres terrain room blob (default blob), or `build` (object build of a 100k-triangle
 //! terrain per preset) or `top` (top-level rebuild over the full sphere field's instances).
-//! ONLY=single|BACKEND: time just that on primary rays, and print traversal counters.
+//! ONLY=single|BACKEND: time just that (on primary rays, or KIND=shadow|diffuse), and print
+//! traversal counters.
 //! KT, KI, BONUS, LEAF, DEPTH, PRESET / TOPBINS, TOPKI, TOPLEAF: override build parameters.
 //! ```
 
@@ -157,25 +158,40 @@ fn trace(s: &BuiltinScene, params: &BspParams, w: u32, h: u32) {
             let b: Backend = only.parse().unwrap();
             (b.lanes(), Some(b))
         };
-        let rays = rays_for(s, &bsp, RayKind::Primary, w, h, lanes);
+        let kind = match env::<String>("KIND").as_deref() {
+            None | Some("primary") => RayKind::Primary,
+            Some("shadow") => RayKind::Shadow,
+            Some("diffuse") => RayKind::Diffuse,
+            Some(k) => panic!("KIND: primary shadow diffuse, not {k}"),
+        };
+        let occlusion = kind.occlusion();
+        let rays = rays_for(s, &bsp, kind, w, h, lanes);
         let r = match backend {
-            None => workload::time_single(&bsp, &rays, false, 20, Clock::ThreadCpu),
+            None => workload::time_single(&bsp, &rays, occlusion, 20, Clock::ThreadCpu),
             Some(b) => b
                 .run(TimePackets {
                     accel: &bsp,
                     rays: &rays,
-                    occlusion: false,
+                    occlusion,
                     repeats: 20,
                     clock: Clock::ThreadCpu,
                 })
                 .unwrap(),
         };
-        println!("{only}: {:.2} Mr/s", rays.len() as f64 / r.seconds / 1e6);
+        println!(
+            "{only} {}: {:.2} Mr/s",
+            kind.name(),
+            rays.len() as f64 / r.seconds / 1e6
+        );
         let (c, per) = match backend {
             None => {
                 let mut c = TraversalStats::default();
                 for r in &rays {
-                    bsp.intersect1_counted(r, &mut c);
+                    if occlusion {
+                        bsp.occluded1_counted(r, &mut c);
+                    } else {
+                        bsp.intersect1_counted(r, &mut c);
+                    }
                 }
                 (c, 1.0)
             }
@@ -183,6 +199,7 @@ fn trace(s: &BuiltinScene, params: &BspParams, w: u32, h: u32) {
                 b.run(Counted {
                     bsp: &bsp,
                     rays: &rays,
+                    occlusion,
                 })
                 .unwrap(),
                 b.lanes() as f64,
@@ -240,6 +257,7 @@ fn trace(s: &BuiltinScene, params: &BspParams, w: u32, h: u32) {
 struct Counted<'a> {
     bsp: &'a Bsp,
     rays: &'a [Ray1],
+    occlusion: bool,
 }
 
 impl Kernel for Counted<'_> {
@@ -248,8 +266,12 @@ impl Kernel for Counted<'_> {
         let mut c = TraversalStats::default();
         for ch in self.rays.chunks(L::N) {
             let p = Rays::from_fn(l, |i| ch[i.min(ch.len() - 1)]);
-            self.bsp
-                .intersect_counted(l, &p, l.mask_from_fn(|i| i < ch.len()), &mut c);
+            let active = l.mask_from_fn(|i| i < ch.len());
+            if self.occlusion {
+                self.bsp.occluded_counted(l, &p, active, &mut c);
+            } else {
+                self.bsp.intersect_counted(l, &p, active, &mut c);
+            }
         }
         c
     }
