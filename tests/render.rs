@@ -625,6 +625,61 @@ fn a_diffuse_sphere_in_a_uniform_environment_renders_to_albedo_times_radiance() 
     );
 }
 
+/// Light samples shared per 4 x 4 tile (`--light-samples tile`): every backend renders the
+/// scalar image, the image differs from the per-pixel one (the option does something), and
+/// the furnace stays unbiased. With 256 directions per pixel the per-pixel relative standard
+/// deviation is 1.29 / 16 = 8% (see the furnace test); a tile's 16 pixels share their
+/// directions, so the ~300 sphere pixels average over ~20 independent tiles: 1.8%, and the
+/// bound below is over 3 sigma.
+#[test]
+fn light_samples_shared_per_tile_are_the_same_on_every_backend_and_unbiased() {
+    use coherent::render::LightSamples;
+    let (a, env) = ([0.8, 0.5, 0.2], [1.0, 2.0, 0.5]);
+    let sc = furnace_scene(a, 0.0, env, 256, 0);
+    let image = |backend: Backend, m: LightSamples| {
+        let accel = AnyAccel::build(&sc.accel_scene(), &AnyParams::of(AccelKind::Bsp)).unwrap();
+        let mut r = Renderer::new(&sc, accel, W, H).unwrap();
+        r.light_samples = m;
+        render_centres(&r, backend, W, H).unwrap().0
+    };
+    let pixel = image(Backend::Scalar, LightSamples::Pixel);
+    let tile = image(Backend::Scalar, LightSamples::Tile);
+    assert!(pixel != tile, "sharing light samples changed nothing");
+    for backend in Backend::usable() {
+        let img = image(backend, LightSamples::Tile);
+        let db = psnr(&img, &tile, 2.0);
+        assert!(
+            db >= 40.0,
+            "{}: PSNR {db:.1} dB against scalar with shared light samples",
+            backend.name()
+        );
+    }
+    let o = sc.camera.position.as_dvec3();
+    let (mut sum, mut want_sum, mut on_sphere) = ([0.0f64; 3], [0.0f64; 3], 0);
+    for y in 0..H {
+        for x in 0..W {
+            let d = pixel_dir(&sc.camera, x, y);
+            let b = o.dot(d);
+            if b * b - (o.length_squared() - 0.98 * 0.98) > 0.0 {
+                on_sphere += 1;
+                for c in 0..3 {
+                    sum[c] += f64::from(tile[(y * W + x) as usize][c]);
+                    want_sum[c] += f64::from(a[c] * env[c]);
+                }
+            }
+        }
+    }
+    assert!(on_sphere > 200, "{on_sphere} pixels on the sphere");
+    for c in 0..3 {
+        let rel = sum[c] / want_sum[c] - 1.0;
+        assert!(
+            rel.abs() < 0.06,
+            "channel {c}: mean off by {:.2}% over {on_sphere} pixels",
+            rel * 100.0
+        );
+    }
+}
+
 /// A small mesh with per-vertex normals: an icosphere (80 triangles) squashed along y so
 /// that it is not symmetric in the camera's view.
 fn small_mesh() -> (Vec<Vec3>, Vec<Vec3>, Vec<[u32; 3]>) {

@@ -78,7 +78,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .with_context(|| format!("building the {kind} accelerator for {}", scene.name))?;
     let build = t_build.elapsed();
     let memory = accel.memory_bytes();
-    let renderer = Renderer::new(&scene, accel, w, h).context("the scene's camera")?;
+    let mut renderer = Renderer::new(&scene, accel, w, h).context("the scene's camera")?;
+    renderer.light_samples = args.light_samples;
 
     let threads = args.threads.unwrap_or_else(|| {
         std::thread::available_parallelism()

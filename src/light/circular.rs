@@ -68,6 +68,11 @@ impl Circular {
         self.strata.count()
     }
 
+    /// Whether the points are jittered by the caller's numbers (else fixed).
+    pub fn jittered(&self) -> bool {
+        self.strata.jitter()
+    }
+
     #[inline(always)]
     pub fn sample<L: Lanes>(
         &self,

@@ -284,6 +284,18 @@ impl Light {
         }
     }
 
+    /// Whether [`Light::sample`] uses its numbers `u`: the environment, and surface lights
+    /// built to jitter their points.
+    pub fn takes_random_numbers(&self) -> bool {
+        match self {
+            Light::Linear(x) => x.jittered(),
+            Light::Circular(x) => x.jittered(),
+            Light::Rectangular(x) => x.jittered(),
+            Light::Environment(_) => true,
+            _ => false,
+        }
+    }
+
     /// Sample points per shading point (1 for point lights).
     pub fn samples(&self) -> u32 {
         match self {

@@ -11,6 +11,7 @@
 //! see README.md for why.
 
 pub mod centres;
+pub mod light_samples;
 pub mod rng;
 pub mod stats;
 pub mod surface;
@@ -25,6 +26,7 @@ use crate::material::{ShadeHits, Shading};
 use crate::scene::RenderScene;
 use crate::texture::lod_from_differentials;
 
+pub use light_samples::LightSamples;
 use stats::StageClock;
 pub use stats::{LaneCount, RayKind, RenderStats, Stage};
 pub use surface::{Differentials, Geometry, Surface};
@@ -45,6 +47,10 @@ pub struct Renderer<'s, A: Accel> {
     /// Time each stage of the pipeline into [`RenderStats::stage_ns`] (off by default: it
     /// reads the clock several times per packet; when off the stages read no clock).
     pub time_stages: bool,
+    /// Which random numbers pick the light samples (per image sample by default).
+    pub light_samples: LightSamples,
+    /// The image's width in pixels (for [`LightSamples::Tile`]).
+    width: u32,
 }
 
 /// A packet of rays in flight with its per-lane state.
@@ -87,6 +93,8 @@ impl<'s, A: Accel> Renderer<'s, A> {
             ior,
             depth: scene.depth,
             time_stages: false,
+            light_samples: LightSamples::Pixel,
+            width,
         })
     }
 
@@ -132,11 +140,12 @@ impl<'s, A: Accel> Renderer<'s, A> {
             path: 1,
         };
         let mut radiance = Rgbs::zero(l);
+        let light_ids = self.light_samples.ids(l, xs, ys, ids, self.width);
         // Depth-first over the ray tree; allocates only when a packet spawns children.
         let mut pending: Vec<Segment<L>> = Vec::new();
         clock.lap(stats, Stage::Other);
         loop {
-            self.segment(l, &seg, ids, &mut radiance, &mut pending, stats);
+            self.segment(l, &seg, light_ids, &mut radiance, &mut pending, stats);
             match pending.pop() {
                 Some(s) => seg = s,
                 None => break,
@@ -151,7 +160,8 @@ impl<'s, A: Accel> Renderer<'s, A> {
     }
 
     /// Traces one packet: its hits are shaded and lit into `radiance`, its reflection and
-    /// refraction packets go to `pending`.
+    /// refraction packets go to `pending`. The light samples' random numbers derive from
+    /// `ids`.
     #[inline(always)]
     fn segment<L: Lanes>(
         &self,
