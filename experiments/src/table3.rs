@@ -17,7 +17,7 @@ use std::fmt::Display;
 
 use coherent::accel_any::AccelKind;
 use coherent::render::centres::psnr;
-use coherent::render::{RenderStats, Stage};
+use coherent::render::{LightSamples, RenderStats, Stage};
 use coherent::simd::Backend;
 
 use crate::ctx::Ctx;
@@ -31,8 +31,19 @@ pub const EXPERIMENT: Experiment = Experiment {
     name: "table3",
     description: "rendering the test scenes per backend and accel",
     paper: "Table 3 (section 7)",
-    csv: &[FILE, BREAKDOWN_FILE, COHERENCE_FILE, SKIPPED_FILE],
-    plots: &["table3_speedup", "table3_breakdown", "table3_coherence"],
+    csv: &[
+        FILE,
+        BREAKDOWN_FILE,
+        COHERENCE_FILE,
+        LIGHT_SAMPLES_FILE,
+        SKIPPED_FILE,
+    ],
+    plots: &[
+        "table3_speedup",
+        "table3_breakdown",
+        "table3_coherence",
+        "table3_light_samples",
+    ],
     status: Status::Ready { run, report },
 };
 
@@ -52,6 +63,20 @@ const COHERENCE_HEADER: &[&str] = &[
     "depth",
     "packets",
     "avg_active_lanes",
+];
+/// The BSP's frames of the scenes whose lights take random numbers (jittered area lights,
+/// the environment) again with light samples shared per 4 x 4 tile ([`LightSamples::Tile`]), on
+/// scalar and the hand-written backends.
+const LIGHT_SAMPLES_FILE: &str = "table3_light_samples.csv";
+const LIGHT_SAMPLES_HEADER: &[&str] = &[
+    "scene",
+    "backend",
+    "lanes",
+    "seconds",
+    "speedup",
+    "speedup_vs_pixel",
+    "psnr_db",
+    "psnr_vs_pixel_db",
 ];
 /// Scenes, accelerators and backends left out, and why.
 const SKIPPED_FILE: &str = "table3_skipped.csv";
@@ -136,6 +161,7 @@ pub fn run_plan(
     let mut csv = ctx.csv(FILE, HEADER)?;
     let mut breakdown = ctx.csv(BREAKDOWN_FILE, BREAKDOWN_HEADER)?;
     let mut coherence = ctx.csv(COHERENCE_FILE, COHERENCE_HEADER)?;
+    let mut shared = ctx.csv(LIGHT_SAMPLES_FILE, LIGHT_SAMPLES_HEADER)?;
     let specs = frames::scene_specs(plan);
     let bar = ctx.progress(specs.len() as u64, "table3");
     for (name, spec) in &specs {
@@ -273,12 +299,66 @@ pub fn run_plan(
             }
         }
         r.time_stages = false;
+
+        // Light samples shared per tile: the same protocol on the BSP, for scenes with lights
+        // that take random numbers (jittered area lights, the environment).
+        let random_lights = scene.lights.iter().any(|x| x.takes_random_numbers());
+        if random_lights {
+            // The hand-written backends only (the plot's), to keep the run's length.
+            let backends: Vec<Backend> = backends
+                .iter()
+                .copied()
+                .filter(|b| PLOTTED.contains(&b.name()))
+                .collect();
+            let backends = &backends[..];
+            r.light_samples = LightSamples::Tile;
+            let reference = reference.as_ref().expect("the scalar + BSP image");
+            let mut images = BTreeMap::new();
+            let mut tiled: Option<Vec<[f32; 3]>> = None;
+            for &b in backends {
+                let (rendered, _) = frames::frame(&pool, b, r, plan)?;
+                let image = rendered.tone_mapped(Backend::Scalar)?;
+                let db = match &tiled {
+                    None => f64::INFINITY,
+                    Some(t) => psnr(&image, t, 1.0),
+                };
+                images.insert(b, (db, psnr(&image, reference, 1.0)));
+                if tiled.is_none() {
+                    tiled = Some(image);
+                }
+            }
+            let mut secs: BTreeMap<Backend, Vec<f64>> = BTreeMap::new();
+            for _ in 0..rounds {
+                for &b in backends {
+                    let (_, s) = frames::frame(&pool, b, r, plan)?;
+                    secs.entry(b).or_default().push(s);
+                }
+            }
+            r.light_samples = LightSamples::Pixel;
+            let scalar = median(&secs[&Backend::Scalar]);
+            for &b in backends {
+                let s = median(&secs[&b]);
+                let pixel = median(&seconds[&(0, b)]);
+                let (db, vs_pixel) = images[&b];
+                shared.row(&[
+                    name,
+                    &b.name(),
+                    &b.lanes(),
+                    &format!("{s:.6e}"),
+                    &format!("{:.3}", speedup(scalar, s)),
+                    &format!("{:.3}", speedup(pixel, s)),
+                    &format!("{db:.2}"),
+                    &format!("{vs_pixel:.2}"),
+                ])?;
+            }
+        }
         bar.inc(1);
     }
     bar.finish_and_clear();
     csv.finish()?;
     breakdown.finish()?;
     coherence.finish()?;
+    shared.finish()?;
     let mut out = ctx.csv(SKIPPED_FILE, SKIPPED_HEADER)?;
     for (item, why) in &skipped {
         out.row(&[item, why])?;
@@ -341,6 +421,50 @@ fn plots(ctx: &Ctx) -> anyhow::Result<()> {
                 series,
             },
         )?;
+    }
+    if let Some(t) = ctx.read_csv(LIGHT_SAMPLES_FILE, LIGHT_SAMPLES_HEADER)?
+        && !t.rows.is_empty()
+    {
+        // Speedup over scalar with per-pixel samples (from the main table) beside the same
+        // with shared ones, per scene, for the hand-written backends.
+        let main = ctx.read_csv(FILE, HEADER)?;
+        let scenes = t.distinct("scene")?;
+        let mut series = Vec::new();
+        for b in t.distinct("backend")? {
+            if b == "scalar" || !PLOTTED.contains(&b.as_str()) {
+                continue;
+            }
+            let (mut pixel, mut tile) = (Vec::new(), Vec::new());
+            for s in &scenes {
+                tile.push(match find(&t, &[("scene", s), ("backend", &b)])? {
+                    Some(r) => t.f64(r, "speedup")?,
+                    None => f64::NAN,
+                });
+                pixel.push(match &main {
+                    Some(m) => match find(m, &[("scene", s), ("backend", &b), ("accel", "bsp")])? {
+                        Some(r) => m.f64(r, "speedup")?,
+                        None => f64::NAN,
+                    },
+                    None => f64::NAN,
+                });
+            }
+            series.push((format!("{b} pixel"), pixel));
+            series.push((format!("{b} tile"), tile));
+        }
+        // Nothing to plot when scalar is the only backend (a build without SIMD backends).
+        if !series.is_empty() {
+            ctx.bar_chart(
+                "table3_light_samples",
+                &BarChart {
+                    title:
+                        "Light samples per pixel or shared per 4x4 tile: speedup over scalar (BSP)"
+                            .into(),
+                    y_label: "speedup over scalar".into(),
+                    categories: scenes,
+                    series,
+                },
+            )?;
+        }
     }
     if let Some(t) = ctx.read_csv(BREAKDOWN_FILE, BREAKDOWN_HEADER)?
         && !t.rows.is_empty()
@@ -526,7 +650,63 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     if let Some(c) = ctx.read_csv(COHERENCE_FILE, COHERENCE_HEADER)? {
         md.push_str(&coherence_md(ctx, &c)?);
     }
+    if let Some(x) = ctx.read_csv(LIGHT_SAMPLES_FILE, LIGHT_SAMPLES_HEADER)?
+        && !x.rows.is_empty()
+    {
+        md.push_str(&light_samples_md(ctx, &x)?);
+    }
     Ok(Some(md))
+}
+
+fn light_samples_md(ctx: &Ctx, x: &Table) -> anyhow::Result<String> {
+    let mut md = String::from(
+        "\nLight samples shared per 4 x 4 pixel tile (`table3_light_samples.csv`, `coherent \
+         render --light-samples tile`): the scenes whose lights take random numbers (jittered \
+         area lights, the environment) rendered again with the BSP, every sample of a tile using \
+         the same light sample points and environment directions, as the paper's surface \
+         lights use one fixed set of points; the shadow packets of an environment light then \
+         run parallel. Same protocol as above, on scalar and the hand-written backends. `speedup` = over scalar with shared samples; \
+         `vs pixel` = the same backend's per-pixel frame (the table above) / this one; \
+         `psnr_db` against scalar with shared samples (every backend must give that image); \
+         `vs pixel dB` against the scalar per-pixel image (the two differ in their noise \
+         only: each pixel's estimate is unbiased either way, but a tile's noise is \
+         correlated).\n\n",
+    );
+    let mut rows = Vec::new();
+    for s in x.distinct("scene")? {
+        for b in x.distinct("backend")? {
+            if let Some(r) = find(x, &[("scene", &s), ("backend", &b)])? {
+                rows.push(vec![
+                    s.clone(),
+                    b.clone(),
+                    fmt_num(x.f64(r, "seconds")?),
+                    fmt_num(x.f64(r, "speedup")?),
+                    fmt_num(x.f64(r, "speedup_vs_pixel")?),
+                    fmt_num(x.f64(r, "psnr_db")?),
+                    fmt_num(x.f64(r, "psnr_vs_pixel_db")?),
+                ]);
+            }
+        }
+    }
+    md.push_str(&markdown_table(
+        &[
+            "scene",
+            "backend",
+            "seconds",
+            "speedup",
+            "vs pixel",
+            "psnr_db",
+            "vs pixel dB",
+        ],
+        &rows,
+    ));
+    if let Some(p) = ctx.plot_markdown(
+        "table3_light_samples",
+        "speedup over scalar, light samples per pixel and per tile",
+    ) {
+        md.push_str(&p);
+    }
+    Ok(md)
 }
 
 /// The targets: speedup over scalar per lane count (BSP), PSNR, BSP no slower than Embree.
@@ -719,6 +899,17 @@ intensity = [10, 10, 10]
         let scenes = dir.path().join("scenes");
         std::fs::create_dir(&scenes).unwrap();
         std::fs::write(scenes.join("ball.toml"), GOOD).unwrap();
+        // The same under a sky (an environment map: its lights take random numbers).
+        exr::prelude::write_rgb_file(scenes.join("sky.exr"), 8, 4, |_, y| {
+            (1.0f32, 0.9, 0.6 + 0.1 * y as f32)
+        })
+        .unwrap();
+        let sky = GOOD.replace(
+            "type = \"omni\"\nposition = [0, 3, 0]\nintensity = [10, 10, 10]",
+            "type = \"environment\"\nfile = \"sky.exr\"\nsamples = 4",
+        );
+        assert_ne!(sky, GOOD);
+        std::fs::write(scenes.join("sky.toml"), sky).unwrap();
         std::fs::write(
             scenes.join("broken.toml"),
             GOOD.replace("shape = \"quad\"", "mesh = \"missing-asset.obj\""),
@@ -740,7 +931,7 @@ intensity = [10, 10, 10]
         }
         run_plan(&mut ctx, &plan, &backends, &[AccelKind::Bsp], Vec::new()).unwrap();
         let t = ctx.read_csv(FILE, HEADER).unwrap().unwrap();
-        assert_eq!(t.rows.len(), backends.len());
+        assert_eq!(t.rows.len(), 2 * backends.len());
         let r = find(&t, &[("scene", "ball"), ("backend", simd.name())])
             .unwrap()
             .unwrap();
@@ -763,7 +954,7 @@ intensity = [10, 10, 10]
             .unwrap()
             .unwrap();
         assert_eq!(c.f64(r0, "avg_active_lanes").unwrap(), 1.0);
-        // The breakdown's shares add up to 1 per backend.
+        // The breakdown's shares add up to 1 per scene and backend.
         let b = ctx
             .read_csv(BREAKDOWN_FILE, BREAKDOWN_HEADER)
             .unwrap()
@@ -772,10 +963,33 @@ intensity = [10, 10, 10]
             .rows_where("backend", "scalar")
             .unwrap()
             .iter()
+            .filter(|&&r| b.get(r, "scene").unwrap() == "ball")
             .map(|&r| b.f64(r, "share").unwrap())
             .sum();
         assert!((total - 1.0).abs() < 1e-3, "{total}");
+        // Light samples shared per tile: the sky scene only (the omni light takes no
+        // random numbers), every backend the same image, which is not the per-pixel one.
+        let x = ctx
+            .read_csv(LIGHT_SAMPLES_FILE, LIGHT_SAMPLES_HEADER)
+            .unwrap()
+            .unwrap();
+        assert_eq!(x.distinct("scene").unwrap(), vec!["sky".to_owned()]);
+        assert_eq!(x.rows.len(), backends.len(), "{:?}", x.rows);
+        for r in 0..x.rows.len() {
+            assert!(x.f64(r, "seconds").unwrap() > 0.0);
+            assert!(
+                x.f64(r, "psnr_db").unwrap() >= PSNR_TARGET,
+                "{:?}",
+                x.rows[r]
+            );
+            assert!(
+                x.f64(r, "psnr_vs_pixel_db").unwrap().is_finite(),
+                "{:?}",
+                x.rows[r]
+            );
+        }
         let md = report(&ctx).unwrap().unwrap();
+        assert!(md.contains("table3_light_samples.csv"), "{md}");
         assert!(md.contains("images/table3_ball.png"), "{md}");
         assert!(md.contains("scene broken"), "{md}");
         assert!(ctx.path("images/table3_ball.png").is_file());
