@@ -4,7 +4,8 @@
 //! scalar + BSP one; then where the time goes (per stage of the pipeline, from a separate
 //! timed-stages run so the timed frames carry no clock reads) and how coherent the packets
 //! stay (average active lanes per packet at each ray depth; the paper says coherence falls
-//! with depth).
+//! with depth); and, for the scenes whose lights take random numbers, the BSP's frames again
+//! with light samples shared per 4 x 4 pixel tile (`--light-samples tile`).
 //!
 //! Protocol: every scene (the built-ins, then the repository's `scenes/*.toml`; quick mode:
 //! only scenes up to 20,000 triangles at 160 x 120) renders at 1024 x 768 with 1 sample per
