@@ -98,7 +98,7 @@ struct RenderArgs {
     /// Light sample points and environment directions: `pixel` (each sample draws its own)
     /// or `tile` (the samples of a 4x4 pixel tile share them, as the paper's fixed points on
     /// surface lights: coherent shadow packets, noise correlated within a tile).
-    #[arg(long, default_value = "pixel", value_parser = parse_light_samples)]
+    #[arg(long, default_value = "pixel")]
     light_samples: coherent::render::LightSamples,
     /// Output image: .exr (HDR radiance) or .png (tone-mapped).
     #[arg(long, short)]
@@ -106,10 +106,6 @@ struct RenderArgs {
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
-}
-
-fn parse_light_samples(s: &str) -> Result<coherent::render::LightSamples, String> {
-    s.parse()
 }
 
 fn parse_resolution(s: &str) -> Result<(u32, u32), String> {

@@ -84,7 +84,7 @@ fn bad_input_fails_with_a_message() {
          [[lights]]\ntype = \"omni\"\nposition = [0, 3, 0]\nintensity = [1, 1, 1]\n",
     )
     .unwrap();
-    let cases: [(Vec<&str>, &str); 6] = [
+    let cases: [(Vec<&str>, &str); 7] = [
         (
             vec!["render", unfetched.to_str().unwrap(), "--out", png],
             "nothing.glb is missing; it is not fetched: run `python3 scripts/native.py assimp`",
@@ -106,6 +106,17 @@ fn bad_input_fails_with_a_message() {
             "avx1024",
         ),
         (vec!["render", "cornell", "--out", "x.bmp"], "x.bmp"),
+        (
+            vec![
+                "render",
+                "cornell",
+                "--light-samples",
+                "tiles",
+                "--out",
+                png,
+            ],
+            "unknown light sampling `tiles`: pixel or tile",
+        ),
     ];
     for (args, needle) in cases {
         let out = coherent(&args);
