@@ -106,6 +106,7 @@ const TRAVERSAL_HEADER: &[&str] = &[
     "lanes_per_test",
     "mailbox_hit_rate",
     "obvhs_tests_per_ray",
+    "obvhs_nodes_per_ray",
 ];
 
 /// Width 1 (single rays, `None`) and each packet width with its backend.
@@ -528,17 +529,21 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
                     })?,
                 };
                 let n = sets[i].len() as f64;
-                // The BVH's side: obvhs' (CWBVH) triangle tests per single ray.
+                // The BVH's side: obvhs' (CWBVH) triangle tests and 8-wide nodes per
+                // single ray.
                 #[cfg_attr(not(feature = "obvhs"), allow(unused_mut))]
-                let mut bvh = String::from("-");
+                let (mut bvh_tests, mut bvh_nodes) = (String::from("-"), String::from("-"));
                 #[cfg(feature = "obvhs")]
                 if wd == 1 {
                     for (o, _) in &others {
                         match o {
                             AnyAccel::Obvhs(o) => {
-                                let t: u64 =
-                                    sets[i].iter().map(|r| o.triangle_tests1(r, occ)).sum();
-                                bvh = format!("{:.3}", t as f64 / n);
+                                let (t, nodes) = sets[i]
+                                    .iter()
+                                    .map(|r| o.counts1(r, occ))
+                                    .fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+                                bvh_tests = format!("{:.3}", t as f64 / n);
+                                bvh_nodes = format!("{:.3}", nodes as f64 / n);
                             }
                             #[allow(unreachable_patterns)]
                             _ => {}
@@ -554,7 +559,8 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
                     &format!("{:.3}", c.tri_tests as f64 / n),
                     &format!("{:.3}", if wd == 1 { 1.0 } else { c.lanes_per_test() }),
                     &format!("{:.4}", c.mailbox_hit_rate()),
-                    &bvh,
+                    &bvh_tests,
+                    &bvh_nodes,
                 ])?;
             }
         }
@@ -915,8 +921,11 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
             "\nTraversal per ray (first-hit queries, any-hit for shadow rays; packet counts \
              divided by the rays in them): the BSP's inner nodes, leaves, triangle tests, active \
              lanes per packet test, the share of triangle tests the intersection cache \
-             (mailbox) saved, and for comparison the triangle tests per single ray of a BVH \
-             over the same meshes (obvhs' CWBVH) (`accel_traversal.csv`).\n\n",
+             (mailbox) saved, and for comparison the triangle tests and nodes per single ray of \
+             a BVH over the same meshes (obvhs' CWBVH, counted with obvhs' own traversal \
+             code). A BSP inner node is one split-plane test; a CWBVH node tests the boxes of \
+             its up to 8 children at once, so the node columns count steps, not work \
+             (`accel_traversal.csv`).\n\n",
         );
         md.push_str(&tr.to_markdown());
     }
@@ -1211,20 +1220,22 @@ fn native_report(ctx: &Ctx, rows: &Rows) -> anyhow::Result<Option<String>> {
     Ok(Some(md))
 }
 
-/// Reads `file` with `header`, or, for results written before the last column was added
-/// (`hits,t_sum` in `accel.csv`, `obvhs_tests_per_ray` in `accel_traversal.csv`), with the
-/// header they had; the report then shows what those files hold.
+/// Reads `file` with `header`, or, for results written before the last columns were added
+/// (`hits,t_sum` in `accel.csv`, `obvhs_tests_per_ray` and then `obvhs_nodes_per_ray` in
+/// `accel_traversal.csv`), with the header they had; the report then shows what those files
+/// hold.
 fn read_either(ctx: &Ctx, file: &str, header: &[&str]) -> anyhow::Result<Option<crate::Table>> {
+    let older: &[usize] = if file.ends_with("traversal.csv") {
+        &[1, 2]
+    } else {
+        &[2]
+    };
     match ctx.read_csv(file, header) {
         Ok(t) => Ok(t),
-        Err(e) => {
-            let old = if file.ends_with("traversal.csv") {
-                &header[..header.len() - 1]
-            } else {
-                &header[..header.len() - 2]
-            };
-            ctx.read_csv(file, old).map_err(|_| e)
-        }
+        Err(e) => older
+            .iter()
+            .find_map(|&k| ctx.read_csv(file, &header[..header.len() - k]).ok())
+            .ok_or(e),
     }
 }
 

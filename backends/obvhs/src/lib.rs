@@ -13,4 +13,4 @@ mod tree;
 mod tests;
 
 pub use scene::{Obvhs, ObvhsParams};
-pub use tree::{Kind, Preset, Tree};
+pub use tree::{Count, Counts, Kind, Preset, Tree};

@@ -11,7 +11,7 @@ use obvhs::aabb::Aabb;
 use obvhs::ray::Ray;
 use obvhs::triangle::Triangle;
 
-use crate::tree::{Kind, Preset, Tree};
+use crate::tree::{Count, Counts, Kind, Preset, Tree};
 
 /// How the scene is built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -95,20 +95,17 @@ fn world_box(mesh: &Mesh, inst: &Placed) -> Aabb {
     b
 }
 
-/// Counts triangle tests (`()` counts nothing).
-trait TestCount {
-    fn tri(&self);
-}
+/// The top tree's side of a count: its nodes count, its primitives (instance boxes) are not
+/// triangle tests.
+struct TopNodes<'a, C>(&'a C);
 
-impl TestCount for () {
+impl<C: Count> Count for TopNodes<'_, C> {
+    const COUNTS: bool = C::COUNTS;
     #[inline(always)]
-    fn tri(&self) {}
-}
-
-impl TestCount for core::cell::Cell<u64> {
+    fn prim(&self) {}
     #[inline(always)]
-    fn tri(&self) {
-        self.set(self.get() + 1);
+    fn node(&self) {
+        self.0.node();
     }
 }
 
@@ -252,20 +249,21 @@ impl Obvhs {
         self.first_hit1_c(r, &())
     }
 
-    /// Triangle tests one ray's first-hit (or, with `occlusion`, any-hit) query makes: the
-    /// BVH's side of the traversal counters the `accel` experiment reports beside the BSP's.
-    pub fn triangle_tests1(&self, r: &Ray1, occlusion: bool) -> u64 {
-        let c = core::cell::Cell::new(0);
+    /// Triangle tests and CWBVH nodes (top tree's included) of one ray's first-hit (or, with
+    /// `occlusion`, any-hit) query: the BVH's side of the traversal counters the `accel`
+    /// experiment reports beside the BSP's. Returns `(tests, nodes)`; nodes are 0 for BVH2.
+    pub fn counts1(&self, r: &Ray1, occlusion: bool) -> (u64, u64) {
+        let c = Counts::default();
         if occlusion {
             self.any_hit1_c(r, &c);
         } else {
             self.first_hit1_c(r, &c);
         }
-        c.get()
+        (c.prims.get(), c.nodes.get())
     }
 
     #[inline(always)]
-    fn first_hit1_c(&self, r: &Ray1, c: &impl TestCount) -> Option<Hit1> {
+    pub(crate) fn first_hit1_c(&self, r: &Ray1, c: &impl Count) -> Option<Hit1> {
         if !r.is_valid() {
             return None;
         }
@@ -273,10 +271,9 @@ impl Obvhs {
         let world = world_ray(&r);
         if let Some(m) = self.direct {
             let mesh = &self.meshes[m];
-            let (k, t) = mesh.tree.closest(world, |lr, t| {
-                c.tri();
-                hit_t(&mesh.tris[t as usize], lr)
-            })?;
+            let (k, t) = mesh
+                .tree
+                .closest(world, c, |lr, t| hit_t(&mesh.tris[t as usize], lr))?;
             let (u, v) = barycentrics(&mesh.tris[k as usize], &world);
             return Some(Hit1 {
                 t: t + shift,
@@ -287,15 +284,15 @@ impl Obvhs {
             });
         }
         let mut best: Option<(u32, u32, Ray)> = None;
-        let found = self.top.closest(world, |ray, i| {
+        let found = self.top.closest(world, &TopNodes(c), |ray, i| {
             let i = self.top_ids[i as usize];
             let inst = &self.instances[i as usize];
             let mesh = &self.meshes[inst.mesh];
             let local = self.object_ray(inst, ray, ray.tmax);
-            match mesh.tree.closest(local, |lr, t| {
-                c.tri();
-                hit_t(&mesh.tris[t as usize], lr)
-            }) {
+            match mesh
+                .tree
+                .closest(local, c, |lr, t| hit_t(&mesh.tris[t as usize], lr))
+            {
                 Some((prim, t)) if t < ray.tmax => {
                     best = Some((i, prim, local));
                     t
@@ -321,7 +318,7 @@ impl Obvhs {
     }
 
     #[inline(always)]
-    fn any_hit1_c(&self, r: &Ray1, c: &impl TestCount) -> bool {
+    pub(crate) fn any_hit1_c(&self, r: &Ray1, c: &impl Count) -> bool {
         if !r.is_valid() {
             return false;
         }
@@ -331,20 +328,19 @@ impl Obvhs {
         let world = world_ray(&r);
         if let Some(m) = self.direct {
             let mesh = &self.meshes[m];
-            return mesh.tree.any(world, |lr, t| {
-                c.tri();
-                hit_t(&mesh.tris[t as usize], lr)
-            });
+            return mesh
+                .tree
+                .any(world, c, |lr, t| hit_t(&mesh.tris[t as usize], lr));
         }
-        self.top.any(world, |ray, i| {
+        self.top.any(world, &TopNodes(c), |ray, i| {
             let i = self.top_ids[i as usize];
             let inst = &self.instances[i as usize];
             let mesh = &self.meshes[inst.mesh];
             let local = self.object_ray(inst, ray, ray.tmax);
-            if mesh.tree.any(local, |lr, t| {
-                c.tri();
-                hit_t(&mesh.tris[t as usize], lr)
-            }) {
+            if mesh
+                .tree
+                .any(local, c, |lr, t| hit_t(&mesh.tris[t as usize], lr))
+            {
                 0.0
             } else {
                 f32::INFINITY

@@ -202,3 +202,67 @@ fn empty_scene_misses() {
     assert_eq!(scene.intersect1(&up(0.5, 0.5)), None);
     assert!(!scene.occluded1(&up(0.5, 0.5)));
 }
+
+/// A `n` x `n` grid of unit squares in z = 0 (2 n^2 triangles).
+fn grid(n: u32) -> Mesh {
+    let mut p = Vec::new();
+    for y in 0..=n {
+        for x in 0..=n {
+            p.push(Vec3::new(x as f32, y as f32, 0.0));
+        }
+    }
+    let mut t = Vec::new();
+    for y in 0..n {
+        for x in 0..n {
+            let i = y * (n + 1) + x;
+            t.push([i, i + 1, i + n + 2]);
+            t.push([i, i + n + 2, i + n + 1]);
+        }
+    }
+    Mesh::new("grid", p, t)
+}
+
+#[test]
+fn counted_traversals_answer_like_the_timed_ones_and_count_nodes() {
+    let one = Scene::new(vec![grid(16)], vec![Instance::new(0, Affine3A::IDENTITY)]);
+    let two = Scene::new(
+        vec![grid(16)],
+        vec![
+            Instance::new(0, Affine3A::IDENTITY),
+            Instance::new(0, Affine3A::from_translation(Vec3::new(20.0, 0.0, 1.0))),
+        ],
+    );
+    for (name, scene) in [("one mesh", one), ("two instances", two)] {
+        for kind in Kind::ALL {
+            let acc = Obvhs::build(&scene, &params(kind)).unwrap();
+            let mut nodes = 0;
+            for i in 0..200u32 {
+                let (x, y) = ((i % 20) as f32 * 1.9 + 0.13, (i / 20) as f32 * 1.7 + 0.31);
+                let r = Ray1::infinite(Vec3::new(x, y, -1.0), Vec3::new(0.01, 0.02, 1.0));
+                let c = Counts::default();
+                assert_eq!(
+                    acc.first_hit1_c(&r, &c),
+                    acc.intersect1(&r),
+                    "{name} {kind:?}"
+                );
+                if acc.intersect1(&r).is_some() {
+                    assert!(c.prims.get() >= 1, "{name} {kind:?}: a hit without a test");
+                }
+                assert_eq!(acc.counts1(&r, false), (c.prims.get(), c.nodes.get()));
+                let c = Counts::default();
+                assert_eq!(acc.any_hit1_c(&r, &c), acc.occluded1(&r), "{name} {kind:?}");
+                if !acc.occluded1(&r) {
+                    // A miss tests what the ray's boxes hold, whichever query it is.
+                    assert_eq!(c.prims.get(), acc.counts1(&r, false).0, "{name} {kind:?}");
+                }
+                nodes += c.nodes.get();
+            }
+            match kind {
+                // A CWBVH of 512 triangles has several nodes below the root.
+                Kind::Cwbvh => assert!(nodes > 200, "{name}: {nodes} CWBVH nodes for 200 rays"),
+                // obvhs' BVH2 traversal has no node hook.
+                Kind::Bvh2 => assert_eq!(nodes, 0, "{name}"),
+            }
+        }
+    }
+}

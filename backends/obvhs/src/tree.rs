@@ -1,8 +1,16 @@
 //! One obvhs tree, BVH2 or CWBVH (8-wide compressed), with its build presets and the three
 //! single-ray traversals the comparison with section 3's BSP needs: closest hit, any hit,
 //! and every hit. obvhs traverses single rays only.
+//!
+//! The closest- and any-hit traversals take a [`Count`]: `()` runs obvhs' own traversal
+//! functions (the timed path), [`Counts`] runs the same CWBVH traversal through obvhs'
+//! `traverse!` macro with the node test counted (the BVH's side of the `accel` experiment's
+//! traversal counters).
 
+use std::cell::Cell;
 use std::time::Duration;
+
+use glam::UVec2;
 
 use obvhs::bvh2::Bvh2;
 use obvhs::cwbvh::CwBvh;
@@ -101,6 +109,44 @@ impl core::str::FromStr for Preset {
     }
 }
 
+/// What a traversal counts: nothing (`()`, obvhs' own traversal) or [`Counts`].
+pub trait Count {
+    /// False for `()`: the traversal is obvhs' own function, with nothing counted.
+    const COUNTS: bool;
+    /// One primitive test.
+    fn prim(&self);
+    /// One node whose children's boxes were tested (8 at once in a CWBVH node).
+    fn node(&self);
+}
+
+impl Count for () {
+    const COUNTS: bool = false;
+    #[inline(always)]
+    fn prim(&self) {}
+    #[inline(always)]
+    fn node(&self) {}
+}
+
+/// Primitive tests and node visits of counted traversals (summed over calls).
+#[derive(Debug, Default)]
+pub struct Counts {
+    pub prims: Cell<u64>,
+    /// CWBVH nodes visited; a BVH2 traversal (obvhs' own, which has no node hook) leaves it 0.
+    pub nodes: Cell<u64>,
+}
+
+impl Count for Counts {
+    const COUNTS: bool = true;
+    #[inline(always)]
+    fn prim(&self) {
+        self.prims.set(self.prims.get() + 1);
+    }
+    #[inline(always)]
+    fn node(&self) {
+        self.nodes.set(self.nodes.get() + 1);
+    }
+}
+
 /// A built tree over some primitives (triangles of a mesh, or instance boxes). `None` for
 /// no primitives (obvhs needs at least one).
 pub enum Tree {
@@ -166,14 +212,49 @@ impl Tree {
 
     /// Closest hit: `f(ray, i)` is the distance to primitive `i` (an original index) or
     /// infinity; returns the primitive and distance of the closest one below `ray.tmax`.
+    /// `c` counts the primitive tests and (CWBVH) nodes.
     #[inline(always)]
-    pub fn closest(&self, ray: Ray, mut f: impl FnMut(&Ray, u32) -> f32) -> Option<(u32, f32)> {
+    pub fn closest<C: Count>(
+        &self,
+        ray: Ray,
+        c: &C,
+        mut f: impl FnMut(&Ray, u32) -> f32,
+    ) -> Option<(u32, f32)> {
         let mut hit = RayHit::none();
         let found = match self {
             Self::Empty => false,
             Self::Bvh2(b) => {
                 let ids = &b.primitive_indices;
-                b.ray_traverse(ray, &mut hit, |r, i| f(r, ids[i]))
+                b.ray_traverse(ray, &mut hit, |r, i| {
+                    c.prim();
+                    f(r, ids[i])
+                })
+            }
+            Self::Cwbvh(b) if C::COUNTS => {
+                // `CwBvh::ray_traverse` with the node test counted.
+                let ids = &b.primitive_indices;
+                let mut r = ray;
+                let mut state = b.new_traversal(ray.direction);
+                let mut node;
+                obvhs::traverse!(
+                    b,
+                    node,
+                    state,
+                    {
+                        c.node();
+                        node.intersect_ray(&r, state.oct_inv4)
+                    },
+                    {
+                        c.prim();
+                        let t = f(&r, ids[state.primitive_id as usize]);
+                        if t < r.tmax {
+                            hit.primitive_id = state.primitive_id;
+                            hit.t = t;
+                            r.tmax = t;
+                        }
+                    }
+                );
+                hit.t < ray.tmax
             }
             Self::Cwbvh(b) => {
                 let ids = &b.primitive_indices;
@@ -188,14 +269,44 @@ impl Tree {
         found.then(|| (ids[hit.primitive_id as usize], hit.t))
     }
 
-    /// Whether `f(ray, i)` is finite for some primitive (stops at the first).
+    /// Whether `f(ray, i)` is finite for some primitive (stops at the first). `c` counts the
+    /// primitive tests and (CWBVH) nodes.
     #[inline(always)]
-    pub fn any(&self, ray: Ray, mut f: impl FnMut(&Ray, u32) -> f32) -> bool {
+    pub fn any<C: Count>(&self, ray: Ray, c: &C, mut f: impl FnMut(&Ray, u32) -> f32) -> bool {
         match self {
             Self::Empty => false,
             Self::Bvh2(b) => {
                 let ids = &b.primitive_indices;
-                !b.ray_traverse_miss(ray, |r, i| f(r, ids[i]))
+                !b.ray_traverse_miss(ray, |r, i| {
+                    c.prim();
+                    f(r, ids[i])
+                })
+            }
+            Self::Cwbvh(b) if C::COUNTS => {
+                // `CwBvh::ray_traverse_miss` with the node test counted.
+                let ids = &b.primitive_indices;
+                let mut state = b.new_traversal(ray.direction);
+                let mut node;
+                let mut found = false;
+                'outer: {
+                    obvhs::traverse!(
+                        b,
+                        node,
+                        state,
+                        {
+                            c.node();
+                            node.intersect_ray(&ray, state.oct_inv4)
+                        },
+                        {
+                            c.prim();
+                            if f(&ray, ids[state.primitive_id as usize]) < ray.tmax {
+                                found = true;
+                                break 'outer;
+                            }
+                        }
+                    );
+                }
+                found
             }
             Self::Cwbvh(b) => {
                 let ids = &b.primitive_indices;
