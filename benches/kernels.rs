@@ -1,4 +1,5 @@
-//! Criterion benches of the approximation kernels (issue 2) on every backend usable here:
+//! Criterion benches of the approximation kernels (paper section 6.1's exp/log/pow and the
+//! testbed's acos/atan2) on every backend usable here:
 //! `cargo bench --bench kernels`. Throughput is in values per second; compare backends
 //! within one run.
 

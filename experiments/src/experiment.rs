@@ -109,9 +109,9 @@ pub type ReportFn = fn(&Ctx) -> anyhow::Result<Option<String>>;
 pub enum Status {
     /// Implemented.
     Ready { run: RunFn, report: ReportFn },
-    /// Registered so its name is known, but not written yet; `issue` is the issue that
-    /// brings it, where one is filed.
-    Planned { issue: Option<u32> },
+    /// Registered so its name is known, but not written yet; `waits_for` says in the user's
+    /// words what it needs first (e.g. "the renderer"), where that is known.
+    Planned { waits_for: Option<&'static str> },
 }
 
 /// One experiment. Each module exports one as `pub const EXPERIMENT: Experiment` and the
@@ -138,7 +138,7 @@ impl Experiment {
         description: &'static str,
         paper: &'static str,
         csv: &'static [&'static str],
-        issue: Option<u32>,
+        waits_for: Option<&'static str>,
     ) -> Experiment {
         Experiment {
             name,
@@ -146,7 +146,7 @@ impl Experiment {
             paper,
             csv,
             plots: &[],
-            status: Status::Planned { issue },
+            status: Status::Planned { waits_for },
         }
     }
 
@@ -163,14 +163,14 @@ impl Experiment {
         )
     }
 
-    /// "not implemented yet (issue N)".
+    /// "not implemented yet (it needs the renderer)".
     pub fn planned_text(&self) -> Option<String> {
         match self.status {
             Status::Ready { .. } => None,
-            Status::Planned { issue: Some(n) } => Some(format!("not implemented yet (issue {n})")),
-            Status::Planned { issue: None } => {
-                Some("not implemented yet (no issue filed yet)".to_owned())
+            Status::Planned { waits_for: Some(w) } => {
+                Some(format!("not implemented yet (it needs {w})"))
             }
+            Status::Planned { waits_for: None } => Some("not implemented yet".to_owned()),
         }
     }
 }
@@ -258,7 +258,7 @@ mod tests {
                 plots: &[],
                 status: READY,
             },
-            Experiment::planned("b", "second", "Table 2", &["b.csv"], Some(7)),
+            Experiment::planned("b", "second", "Table 2", &["b.csv"], Some("the lights")),
             Experiment {
                 name: "c",
                 description: "third",
@@ -305,15 +305,15 @@ mod tests {
     }
 
     #[test]
-    fn planned_experiments_are_refused_with_their_issue() {
+    fn planned_experiments_are_refused_with_what_they_need() {
         let registry = registry();
         let e = select(&registry, Some(&only(&["b"]))).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "experiment `b` is not implemented yet (issue 7)"
+            "experiment `b` is not implemented yet (it needs the lights)"
         );
         let e = select(&registry, Some(&only(&["d"]))).unwrap_err();
-        assert!(e.to_string().contains("no issue filed yet"), "{e}");
+        assert_eq!(e.to_string(), "experiment `d` is not implemented yet");
     }
 
     #[test]

@@ -255,7 +255,13 @@ mod tests {
                 plots: &["demo"],
                 status: Status::Ready { run, report },
             },
-            Experiment::planned("later", "comes later", "Table 10", &["later.csv"], Some(12)),
+            Experiment::planned(
+                "later",
+                "comes later",
+                "Table 10",
+                &["later.csv"],
+                Some("the renderer"),
+            ),
         ]
     }
 
@@ -276,7 +282,7 @@ mod tests {
         assert!(md.contains("*Not run into this folder yet"), "{md}");
         assert!(md.contains("demo.csv (not written yet)"), "{md}");
         assert!(
-            md.contains("*Skipped: not implemented yet (issue 12).*"),
+            md.contains("*Skipped: not implemented yet (it needs the renderer).*"),
             "{md}"
         );
         assert!(md.contains(&ctx.machine.cpu), "{md}");
