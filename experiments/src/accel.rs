@@ -55,7 +55,12 @@ pub const EXPERIMENT: Experiment = Experiment {
     name: "accel",
     description: "traversal speed, build time and memory per accel, ray kind and packet width",
     paper: "section 3 (two-level BSP), against Embree 4 and obvhs",
-    csv: &["accel.csv", "accel_threshold.csv", "accel_traversal.csv"],
+    csv: &[
+        "accel.csv",
+        "accel_threshold.csv",
+        "accel_traversal.csv",
+        "accel_simd_leaves.csv",
+    ],
     plots: &[
         "accel_speedup_vs_width",
         "accel_mrays",
@@ -78,6 +83,16 @@ const HEADER: &[&str] = &[
     "memory_bytes",
     "hits",
     "t_sum",
+];
+const LEAVES_HEADER: &[&str] = &[
+    "scene",
+    "rays",
+    "leaf_test",
+    "tree",
+    "mrays_per_s",
+    "bsp_over_embree",
+    "tests_per_ray",
+    "memory_bytes",
 ];
 const EMBREE_HEADER: &[&str] = &[
     "scene",
@@ -372,6 +387,7 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     let mut trav = ctx.csv("accel_traversal.csv", TRAVERSAL_HEADER)?;
     #[cfg_attr(not(feature = "embree"), allow(unused_mut, unused_variables))]
     let mut emb = ctx.csv("accel_embree.csv", EMBREE_HEADER)?;
+    let mut leaves = ctx.csv("accel_simd_leaves.csv", LEAVES_HEADER)?;
     let mut built = Vec::new();
     let mut disagreements = Vec::new();
     for s in &all {
@@ -379,6 +395,7 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
         let (bsp, build_ms) = build_timed::<Bsp>(&s.scene, &BspParams::default(), repeats)?;
         let memory = bsp.memory_bytes();
         let mut others = build_others(ctx, s, repeats);
+        let four = simd_leaf_bsps(&s.scene)?;
         for kind in RayKind::ALL {
             let sets: Vec<Vec<Ray1>> = widths
                 .iter()
@@ -563,6 +580,15 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
                     &bvh_nodes,
                 ])?;
             }
+            let mut ls = LeafSet {
+                csv: &mut leaves,
+                scene: &s.name,
+                kind,
+                rays: &sets[0],
+                samples,
+                disagreements: &mut disagreements,
+            };
+            ls.rows(&bsp, &four, &others)?;
         }
         bar.inc(1);
         built.push(bsp);
@@ -570,6 +596,7 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     csv.finish()?;
     trav.finish()?;
     emb.finish()?;
+    leaves.finish()?;
     if !disagreements.is_empty() {
         anyhow::bail!(
             "accel: accelerators disagree with the BSP's single rays beyond the edge \
@@ -616,6 +643,90 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     bar.finish_and_clear();
     plots(ctx)?;
     Ok(())
+}
+
+/// The BSPs whose single rays test leaves four triangles at a time: on the default tree,
+/// and on a tree whose leaves are priced per four triangles.
+fn simd_leaf_bsps(scene: &coherent::accel::Scene) -> anyhow::Result<Vec<(&'static str, Bsp)>> {
+    let mut p = BspParams {
+        simd_leaves: true,
+        ..BspParams::default()
+    };
+    let default = Bsp::build(scene, &p)?;
+    p.object.leaf_group = 4;
+    Ok(vec![
+        ("default", default),
+        ("per_four", Bsp::build(scene, &p)?),
+    ])
+}
+
+/// The rows of `accel_simd_leaves.csv` for one scene and ray kind: the BSP's single rays one
+/// triangle at a time (the `accel.csv` row's configuration) and four at a time, beside
+/// Embree's single rays, timed interleaved over the same rays.
+struct LeafSet<'a> {
+    csv: &'a mut crate::table::CsvOut,
+    scene: &'a str,
+    kind: RayKind,
+    rays: &'a [Ray1],
+    samples: usize,
+    disagreements: &'a mut Vec<String>,
+}
+
+impl LeafSet<'_> {
+    #[cfg_attr(not(feature = "embree"), allow(unused_variables))]
+    fn rows(
+        &mut self,
+        one: &Bsp,
+        four: &[(&'static str, Bsp)],
+        others: &[(AnyAccel, f64)],
+    ) -> anyhow::Result<()> {
+        let occ = self.kind.occlusion();
+        let bsps: Vec<(&str, &str, &Bsp)> = std::iter::once(("one", "default", one))
+            .chain(four.iter().map(|(t, b)| ("four", *t, b)))
+            .collect();
+        #[cfg(feature = "embree")]
+        let embree = others
+            .iter()
+            .map(|(o, _)| o)
+            .find(|o| matches!(o, AnyAccel::Embree(_)));
+        #[cfg(not(feature = "embree"))]
+        let embree: Option<&AnyAccel> = None;
+        let n = bsps.len() + embree.is_some() as usize;
+        let res = interleaved(n, self.samples, |v| match bsps.get(v) {
+            Some((_, _, b)) => pass_any(*b, self.rays, occ, None),
+            None => pass_of(embree.unwrap(), self.rays, self.kind, None),
+        })?;
+        let rate = |v: usize| self.rays.len() as f64 / res[v].0 / 1e6;
+        for (v, (test, tree, b)) in bsps.iter().enumerate() {
+            let mut c = TraversalStats::default();
+            for r in self.rays {
+                if occ {
+                    b.occluded1_counted(r, &mut c);
+                } else {
+                    b.intersect1_counted(r, &mut c);
+                }
+            }
+            let vs = embree.map_or("-".to_owned(), |_| format!("{:.3}", rate(v) / rate(n - 1)));
+            self.csv.row(&[
+                &self.scene,
+                &self.kind.name(),
+                test,
+                tree,
+                &format!("{:.3}", rate(v)),
+                &vs,
+                &format!("{:.3}", c.tri_tests as f64 / self.rays.len() as f64),
+                &b.memory_bytes(),
+            ])?;
+            if let Some(why) = disagreement(&res[0].1, &res[v].1, self.rays.len()) {
+                self.disagreements.push(format!(
+                    "{} {} rays, BSP with leaves tested {test} at a time ({tree} tree): {why}",
+                    self.scene,
+                    self.kind.name()
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Which configuration a timed sample runs.
@@ -928,6 +1039,18 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
              (`accel_traversal.csv`).\n\n",
         );
         md.push_str(&tr.to_markdown());
+    }
+    if let Some(t) = ctx.read_csv("accel_simd_leaves.csv", LEAVES_HEADER)? {
+        md.push_str(
+            "\nSingle rays testing a leaf's triangles four at a time (SSE, the leaf's \
+             projection-test records copied into blocks of four; `leaf_test` four) beside one \
+             at a time (the rows above), on the default tree and on a tree whose leaves are \
+             priced per four triangles (`tree` per_four), timed interleaved with Embree's \
+             single rays over the same rays; `tests_per_ray` counts blocks of four for `four` \
+             (`accel_simd_leaves.csv`). The scalar baseline of the paper's tables keeps one \
+             triangle at a time.\n\n",
+        );
+        md.push_str(&t.to_markdown());
     }
     Ok(Some(md))
 }

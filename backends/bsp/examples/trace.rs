@@ -9,7 +9,8 @@
 //! terrain per preset) or `top` (top-level rebuild over the full sphere field's instances).
 //! ONLY=single|BACKEND: time just that (on primary rays, or KIND=shadow|diffuse), and print
 //! traversal counters.
-//! KT, KI, BONUS, LEAF, DEPTH, PRESET / TOPBINS, TOPKI, TOPLEAF: override build parameters.
+//! KT, KI, BONUS, LEAF, DEPTH, PRESET, GROUP (leaves priced per group) / TOPBINS, TOPKI,
+//! TOPLEAF: override build parameters. SIMD_LEAVES=1: single rays test leaves 4 at a time.
 //! ```
 
 use coherent_accel::scenes::{self, BuiltinScene, SceneSize};
@@ -36,6 +37,8 @@ fn params(thr: Option<u32>) -> BspParams {
     o.empty_bonus = env("BONUS").unwrap_or(o.empty_bonus);
     o.leaf_size = env("LEAF").unwrap_or(o.leaf_size);
     o.max_depth = env("DEPTH").unwrap_or(o.max_depth);
+    o.leaf_group = env("GROUP").unwrap_or(o.leaf_group);
+    p.simd_leaves = env::<u32>("SIMD_LEAVES").is_some_and(|v| v == 1);
     let t = &mut p.top;
     t.bins = env("TOPBINS").unwrap_or(t.bins);
     t.intersection_cost = env("TOPKI").unwrap_or(t.intersection_cost);

@@ -11,6 +11,7 @@ use coherent_simd::Lanes;
 use glam::{Affine3A, Vec3};
 
 use crate::counters::{Counters, TraversalStats};
+use crate::leaf4::Leaves4;
 use crate::query::{All1, AllP, Any1, AnyP, First1, FirstP};
 use crate::{BspParams, KdTree, build_sah, build_top};
 
@@ -21,6 +22,8 @@ pub struct MeshTree {
     pub tris: Vec<TriAccel>,
     /// Degenerate triangles dropped.
     pub degenerate: usize,
+    /// The leaves' records in blocks of four, for single rays ([`BspParams::simd_leaves`]).
+    pub leaves4: Option<Leaves4>,
 }
 
 impl MeshTree {
@@ -46,11 +49,20 @@ impl MeshTree {
             tree: build_sah(&verts, p),
             degenerate: indices.len() - tris.len(),
             tris,
+            leaves4: None,
         }
     }
 
+    /// Adds the blocks single rays test four triangles at a time.
+    pub fn with_simd_leaves(mut self) -> Self {
+        self.leaves4 = Some(Leaves4::new(&self.tree, &self.tris));
+        self
+    }
+
     pub fn memory_bytes(&self) -> usize {
-        self.tree.memory_bytes() + self.tris.len() * size_of::<TriAccel>()
+        self.tree.memory_bytes()
+            + self.tris.len() * size_of::<TriAccel>()
+            + self.leaves4.as_ref().map_or(0, Leaves4::memory_bytes)
     }
 }
 
@@ -254,7 +266,14 @@ impl Accel for Bsp {
         let meshes: Vec<MeshTree> = scene
             .meshes
             .iter()
-            .map(|m| MeshTree::build(&m.positions, &m.indices, &params.object))
+            .map(|m| {
+                let t = MeshTree::build(&m.positions, &m.indices, &params.object);
+                if params.simd_leaves {
+                    t.with_simd_leaves()
+                } else {
+                    t
+                }
+            })
             .collect();
         let mut bsp = Bsp {
             params: params.clone(),

@@ -127,7 +127,8 @@ pub fn build_sah(tris: &[[Vec3; 3]], p: &SahParams) -> KdTree {
 
 impl Builder<'_> {
     fn build(&mut self, node: usize, v: Aabb, ev: [Vec<u64>; 3], n: usize, depth: u32) {
-        let leaf_cost = self.p.intersection_cost * n as f32;
+        let g = self.p.leaf_group.max(1) as usize;
+        let leaf_cost = self.p.intersection_cost * n.div_ceil(g) as f32;
         let plane = if n as u32 <= self.p.leaf_size || depth >= self.depth_limit {
             None
         } else {
@@ -252,9 +253,10 @@ impl Builder<'_> {
         let inv_area = 1.0 / area;
         let (kt, ki) = (self.p.traversal_cost, self.p.intersection_cost);
         let bonus = 1.0 - self.p.empty_bonus;
+        let g = self.p.leaf_group.max(1) as usize;
         let sah = |pl: f32, pr: f32, nl: usize, nr: usize| {
             let lambda = if nl == 0 || nr == 0 { bonus } else { 1.0 };
-            lambda * (kt + ki * (pl * nl as f32 + pr * nr as f32))
+            lambda * (kt + ki * (pl * nl.div_ceil(g) as f32 + pr * nr.div_ceil(g) as f32))
         };
         let ext = v.extent();
         let mut best: Option<Plane> = None;

@@ -19,6 +19,9 @@ pub struct SahParams {
     /// Clip triangles straddling a split to each child ("perfect splits", Wald & Havran);
     /// without it a straddling triangle keeps its bounding box cut by the child's box.
     pub perfect_splits: bool,
+    /// Leaves are priced per group of this many triangles (K_I times the groups): 1 prices
+    /// each triangle, 4 suits leaves tested four at a time ([`BspParams::simd_leaves`]).
+    pub leaf_group: u32,
 }
 
 /// The deepest any tree may be (the traversal stacks hold this many entries).
@@ -65,6 +68,7 @@ impl SahParams {
             max_depth: 0,
             leaf_size: 4,
             perfect_splits: true,
+            leaf_group: 1,
         }
     }
 
@@ -146,6 +150,10 @@ pub struct BspParams {
     /// Packet traversal hands a subtree to single-ray traversal when its active lanes are
     /// at most this many; `None` takes [`default_single_ray_threshold`] for the width.
     pub single_ray_threshold: Option<u32>,
+    /// Single rays test a leaf's triangles four at a time (SSE; the leaves' records copied
+    /// into blocks of four, see `leaf4.rs`). Off by default: the scalar baseline traces one
+    /// triangle at a time, as the paper's non-SSE code did. Packets are unaffected.
+    pub simd_leaves: bool,
 }
 
 impl Default for BspParams {
@@ -155,6 +163,7 @@ impl Default for BspParams {
             top: TopParams::default(),
             mailbox: true,
             single_ray_threshold: None,
+            simd_leaves: false,
         }
     }
 }

@@ -10,6 +10,7 @@ use glam::Vec3;
 use crate::KdTree;
 use crate::bsp::{Bsp, MeshTree};
 use crate::counters::Counters;
+use crate::leaf4::Ray4;
 use crate::mailbox::Mailbox1;
 use crate::query::{LaneTask, Query1};
 use crate::stack::Stack;
@@ -86,7 +87,8 @@ pub(crate) fn min1(a: f32, b: f32) -> f32 {
 }
 
 /// Walks `tree` from node `start` over the ray segment `[tn, tf]`, calling `leaf` on each
-/// leaf's items in front-to-back order until it returns true (returns true then). Nodes
+/// leaf (its node index and items) in front-to-back order until it returns true (returns
+/// true then). Nodes
 /// entirely beyond `limit(s)` are skipped.
 ///
 /// At a split with `ts = (split - o) / d`: the near child alone when `ts > tf`, the far one
@@ -103,7 +105,7 @@ pub(crate) fn walk1<S, C: Counters>(
     s: &mut S,
     c: &mut C,
     limit: impl Fn(&S) -> f32,
-    mut leaf: impl FnMut(&mut S, &mut C, &[u32]) -> bool,
+    mut leaf: impl FnMut(&mut S, &mut C, usize, &[u32]) -> bool,
 ) -> bool {
     let nodes = &tree.nodes[..];
     let mut stack: Stack<(u32, f32, f32)> = Stack::new();
@@ -128,7 +130,7 @@ pub(crate) fn walk1<S, C: Counters>(
             continue;
         }
         c.leaf();
-        if leaf(s, c, &tree.items[n.items()]) {
+        if leaf(s, c, node, &tree.items[n.items()]) {
             return true;
         }
         loop {
@@ -164,6 +166,45 @@ pub(crate) fn mesh1<Q: Query1, C: Counters>(
             None => return false,
         },
     };
+    if let Some(l4) = &mesh.leaves4 {
+        let r4 = Ray4::new(&r.o, &r.d);
+        return walk1(
+            &mesh.tree,
+            r,
+            node,
+            tn,
+            tf,
+            q,
+            c,
+            #[inline(always)]
+            |q| q.limit(),
+            #[inline(always)]
+            |q, c, node, items| {
+                for b in l4.of(node, items.len()) {
+                    c.tri_test(1);
+                    let (mut m, t, u, v) = b.intersect(&r4, r.tmin, q.limit());
+                    // Lane by lane in the leaf's order, as one record after the other.
+                    while m != 0 {
+                        let j = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        if t[j] < q.limit() {
+                            let h = Hit1 {
+                                t: t[j],
+                                u: u[j],
+                                v: v[j],
+                                prim: b.prim[j],
+                                inst,
+                            };
+                            if q.hit(h) {
+                                return true;
+                            }
+                        }
+                    }
+                }
+                false
+            },
+        );
+    }
     let mut mb = Mailbox1::new();
     let tris = &mesh.tris[..];
     walk1(
@@ -177,7 +218,7 @@ pub(crate) fn mesh1<Q: Query1, C: Counters>(
         #[inline(always)]
         |q| q.limit(),
         #[inline(always)]
-        |q, c, items| {
+        |q, c, _, items| {
             for &i in items {
                 if mailbox && mb.seen(i) {
                     c.mailbox_skip(1);
@@ -240,7 +281,7 @@ pub(crate) fn scene1<Q: Query1, C: Counters>(
         #[inline(always)]
         |q| q.limit(),
         #[inline(always)]
-        |q, c, items| {
+        |q, c, _, items| {
             for &i in items {
                 if !seen.seen(i) && enter(q, c, i) {
                     return true;

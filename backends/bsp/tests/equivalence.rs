@@ -25,6 +25,11 @@ fn param_sets(lanes: usize) -> Vec<BspParams> {
         p.single_ray_threshold = thr;
         v.push(p);
     }
+    // Single rays testing leaves four triangles at a time, on leaves priced per four.
+    let mut p = BspParams::default();
+    p.simd_leaves = true;
+    p.object.leaf_group = 4;
+    v.push(p);
     v
 }
 
@@ -334,7 +339,7 @@ macro_rules! bsp_tests {
                     tris in 1usize..400,
                     meshes in 1usize..4,
                     instances in 0usize..7,
-                    preset in 0usize..3,
+                    preset in 0usize..4,
                 ) {
                     let k = RandomScene { seed, tris, meshes, instances, preset };
                     if let Some(r) = on(B, k) {

@@ -159,6 +159,26 @@ fn ci_no_leaks() {
     }
 }
 
+/// Single rays testing leaves four triangles at a time leak no more than one at a time.
+#[test]
+fn ci_no_leaks_with_simd_leaves() {
+    let mut p = BspParams::default();
+    p.simd_leaves = true;
+    p.object.leaf_group = 4;
+    for case in cases() {
+        let bsp = Bsp::build(&case.scene, &p).unwrap();
+        let rays = aimed_rays(&case, 20_000, 42);
+        let leaks = rays.iter().filter(|r| leaked(bsp.intersect1(r))).count();
+        assert_eq!(
+            leaks,
+            0,
+            "{}: leaks over {} single rays",
+            case.name,
+            rays.len()
+        );
+    }
+}
+
 #[test]
 #[ignore = "10^6 rays per case: run in release with --ignored --nocapture"]
 fn million_rays() {
