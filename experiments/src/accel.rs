@@ -582,7 +582,7 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
             }
             let mut ls = LeafSet {
                 csv: &mut leaves,
-                scene: &s.name,
+                scene: s.name,
                 kind,
                 rays: &sets[0],
                 samples,
@@ -692,9 +692,10 @@ impl LeafSet<'_> {
         #[cfg(not(feature = "embree"))]
         let embree: Option<&AnyAccel> = None;
         let n = bsps.len() + embree.is_some() as usize;
-        let res = interleaved(n, self.samples, |v| match bsps.get(v) {
-            Some((_, _, b)) => pass_any(*b, self.rays, occ, None),
-            None => pass_of(embree.unwrap(), self.rays, self.kind, None),
+        let res = interleaved(n, self.samples, |v| match (bsps.get(v), embree) {
+            (Some((_, _, b)), _) => pass_any(*b, self.rays, occ, None),
+            (None, Some(e)) => pass_of(e, self.rays, self.kind, None),
+            (None, None) => unreachable!("one variant per BSP, then Embree's if built"),
         })?;
         let rate = |v: usize| self.rays.len() as f64 / res[v].0 / 1e6;
         for (v, (test, tree, b)) in bsps.iter().enumerate() {

@@ -26,8 +26,10 @@ fn param_sets(lanes: usize) -> Vec<BspParams> {
         v.push(p);
     }
     // Single rays testing leaves four triangles at a time, on leaves priced per four.
-    let mut p = BspParams::default();
-    p.simd_leaves = true;
+    let mut p = BspParams {
+        simd_leaves: true,
+        ..BspParams::default()
+    };
     p.object.leaf_group = 4;
     v.push(p);
     v

@@ -162,8 +162,10 @@ fn ci_no_leaks() {
 /// Single rays testing leaves four triangles at a time leak no more than one at a time.
 #[test]
 fn ci_no_leaks_with_simd_leaves() {
-    let mut p = BspParams::default();
-    p.simd_leaves = true;
+    let mut p = BspParams {
+        simd_leaves: true,
+        ..BspParams::default()
+    };
     p.object.leaf_group = 4;
     for case in cases() {
         let bsp = Bsp::build(&case.scene, &p).unwrap();
