@@ -88,8 +88,7 @@ pub(crate) fn min1(a: f32, b: f32) -> f32 {
 
 /// Walks `tree` from node `start` over the ray segment `[tn, tf]`, calling `leaf` on each
 /// leaf (its node index and items) in front-to-back order until it returns true (returns
-/// true then). Nodes
-/// entirely beyond `limit(s)` are skipped.
+/// true then). Nodes entirely beyond `limit(s)` are skipped.
 ///
 /// At a split with `ts = (split - o) / d`: the near child alone when `ts > tf`, the far one
 /// alone when `ts < tn`, else both. A NaN `ts` (a ray lying in the split plane) visits both
