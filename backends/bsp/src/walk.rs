@@ -54,9 +54,15 @@ impl<L: Lanes> RaysX<L> {
     /// Lane `i` as a single ray.
     #[inline(always)]
     pub fn lane(&self, i: usize) -> Ray1x {
-        let v = |a: &[L::F32s; 4]| Vec3::new(a[0].lane(i), a[1].lane(i), a[2].lane(i));
-        Ray1x::new(v(&self.o), v(&self.d), self.tmin.lane(i))
+        Ray1x::new(lane3(&self.o, i), lane3(&self.d, i), self.tmin.lane(i))
     }
+}
+
+/// Lane `i` of a packet vector as [`Vec3`] (a function, not a closure called twice: it must
+/// inline into the target-feature kernels).
+#[inline(always)]
+fn lane3<F: SimdF32>(a: &[F; 4], i: usize) -> Vec3 {
+    Vec3::new(a[0].lane(i), a[1].lane(i), a[2].lane(i))
 }
 
 /// The ray segments inside box `b`, cut to `[t0, t1]`, with the arithmetic of

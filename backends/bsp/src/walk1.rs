@@ -165,45 +165,6 @@ pub(crate) fn mesh1<Q: Query1, C: Counters>(
             None => return false,
         },
     };
-    if let Some(l4) = &mesh.leaves4 {
-        let r4 = Ray4::new(&r.o, &r.d);
-        return walk1(
-            &mesh.tree,
-            r,
-            node,
-            tn,
-            tf,
-            q,
-            c,
-            #[inline(always)]
-            |q| q.limit(),
-            #[inline(always)]
-            |q, c, node, items| {
-                for b in l4.of(node, items.len()) {
-                    c.tri_test(1);
-                    let (mut m, t, u, v) = b.intersect(&r4, r.tmin, q.limit());
-                    // Lane by lane in the leaf's order, as one record after the other.
-                    while m != 0 {
-                        let j = m.trailing_zeros() as usize;
-                        m &= m - 1;
-                        if t[j] < q.limit() {
-                            let h = Hit1 {
-                                t: t[j],
-                                u: u[j],
-                                v: v[j],
-                                prim: b.prim[j],
-                                inst,
-                            };
-                            if q.hit(h) {
-                                return true;
-                            }
-                        }
-                    }
-                }
-                false
-            },
-        );
-    }
     let mut mb = Mailbox1::new();
     let tris = &mesh.tris[..];
     walk1(
@@ -235,6 +196,60 @@ pub(crate) fn mesh1<Q: Query1, C: Counters>(
                     };
                     if q.hit(h) {
                         return true;
+                    }
+                }
+            }
+            false
+        },
+    )
+}
+
+/// [`mesh1`] testing the leaves' triangles four at a time (`blocks`, the mesh's
+/// [`crate::Leaves4`]), from the root over the ray's part inside the mesh box. Only world rays
+/// entering a mesh take it; a packet lane continuing ray by ray keeps [`mesh1`].
+#[inline(always)]
+fn mesh1_blocks<Q: Query1, C: Counters>(
+    mesh: &MeshTree,
+    l4: &crate::Leaves4,
+    r: &Ray1x,
+    inst: u32,
+    q: &mut Q,
+    c: &mut C,
+) -> bool {
+    let Some((tn, tf)) = r.clip(&mesh.tree.bounds, q.limit()) else {
+        return false;
+    };
+    let r4 = Ray4::new(&r.o, &r.d);
+    walk1(
+        &mesh.tree,
+        r,
+        0,
+        tn,
+        tf,
+        q,
+        c,
+        #[inline(always)]
+        |q| q.limit(),
+        #[inline(always)]
+        |q, c, node, items| {
+            for b in l4.of(node, items.len()) {
+                c.tri_test(1);
+                let (mut m, t, u, v) = b.intersect(&r4, r.tmin, q.limit());
+                // Lane by lane in the leaf's order, as one record after the other.
+                while m != 0 {
+                    let j = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    if t[j] < q.limit() {
+                        let h = Hit1 {
+                            t: t[j],
+                            u: u[j],
+                            v: v[j],
+                            prim: b.prim[j],
+                            inst,
+                        };
+                        if q.hit(h) {
+                            return true;
+                        }
                     }
                 }
             }
@@ -304,16 +319,21 @@ fn enter1<Q: Query1, C: Counters>(
     let inst = &bsp.instances[i as usize];
     let mesh = &bsp.meshes[inst.mesh as usize];
     c.instance(1);
-    if inst.identity {
-        mesh1(mesh, r, i, None, bsp.params.mailbox, q, c)
+    let moved;
+    let r = if inst.identity {
+        r
     } else {
         let m = &inst.object_from_world;
-        let ro = Ray1x::new(
+        moved = Ray1x::new(
             transform_point1(m, od.0),
             transform_vector1(m, od.1),
             r.tmin,
         );
-        mesh1(mesh, &ro, i, None, bsp.params.mailbox, q, c)
+        &moved
+    };
+    match &mesh.leaves4 {
+        Some(l4) => mesh1_blocks(mesh, l4, r, i, q, c),
+        None => mesh1(mesh, r, i, None, bsp.params.mailbox, q, c),
     }
 }
 
