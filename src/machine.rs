@@ -220,7 +220,9 @@ fn cpuid_brand() -> Option<String> {
 }
 
 /// `git rev-parse HEAD` (+ `-dirty`) of the source tree this binary was built from, or of the
-/// current directory when that tree is gone; `unknown` without git.
+/// current directory when that tree is gone; without git there (a binary copied to another
+/// machine with a plain copy of the tree), `$COHERENT_GIT_REV` as the person who copied it
+/// gives it, else `unknown`.
 fn git_rev() -> String {
     let source = Path::new(env!("CARGO_MANIFEST_DIR"));
     let dir = if source.is_dir() {
@@ -240,7 +242,10 @@ fn git_rev() -> String {
             .then(|| String::from_utf8_lossy(&out.stdout).trim().to_owned())
     };
     let Some(rev) = git(&["rev-parse", "HEAD"]).filter(|rev| !rev.is_empty()) else {
-        return "unknown".to_owned();
+        return std::env::var("COHERENT_GIT_REV")
+            .ok()
+            .filter(|rev| !rev.trim().is_empty())
+            .unwrap_or_else(|| "unknown".to_owned());
     };
     match git(&["status", "--porcelain", "--untracked-files=no"]) {
         Some(changes) if !changes.is_empty() => format!("{rev}-dirty"),

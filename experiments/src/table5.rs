@@ -30,6 +30,8 @@ pub const EXPERIMENT: Experiment = Experiment {
 };
 
 const FILE: &str = "table5_threads.csv";
+/// The folder, beside these results, of a run on a machine with more cores.
+const MANYCORE: &str = "manycore";
 /// The contract's columns, then the lanes of the backend.
 const HEADER: &[&str] = &["scene", "backend", "threads", "seconds", "speedup", "lanes"];
 
@@ -52,9 +54,16 @@ const PAPER: PaperTable = PaperTable {
 /// 2 threads over 1, the target.
 const TARGET: f64 = 1.9;
 
-/// 1, 2 and every core, without repeats.
+/// 1, 2, the powers of two between, and every core, without repeats: 1, 2 on two cores,
+/// 1, 2, 4, 8, 16 on sixteen, 1, 2, 4, 8, 12 on twelve.
 pub fn thread_counts(cores: usize) -> Vec<usize> {
-    let mut v = vec![1, 2, cores.max(1)];
+    let mut v = vec![1, 2];
+    let mut n = 4;
+    while n < cores {
+        v.push(n);
+        n *= 2;
+    }
+    v.push(cores.max(1));
     v.sort_unstable();
     v.dedup();
     v
@@ -179,8 +188,8 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
         return Ok(None);
     };
     let mut md = String::from(
-        "The frames of `table3` (same scenes, size and samples; BSP) on a rayon pool of 1, 2 \
-         and every core of the machine (`machine.json`), with the widest backend of this CPU \
+        "The frames of `table3` (same scenes, size and samples; BSP) on a rayon pool of 1, 2, \
+         4, ... and every core of the machine (`machine.json`), with the widest backend of this CPU \
          and the scalar one; every thread count renders once untimed, then 3 rounds visit \
          them in turn and `seconds` is the median; `speedup` = 1-thread seconds / this row's. \
          On a machine shared with other work, the speedup reads low.\n\n",
@@ -221,6 +230,27 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     }
     md.push_str(&PAPER.beside(&ours));
     md.push_str(&format!("\n(ours: backend `{simd}`.) Every row:\n\n"));
+    md.push_str(&every_row(&t)?);
+    if let Some(p) = ctx.plot_markdown("table5_threads", "speedup over 1 thread") {
+        md.push_str(&p);
+    }
+    if let Some(more) = manycore_report(ctx)? {
+        md.push_str(&more);
+    }
+    Ok(Some(md))
+}
+
+/// Every row of `t`: per scene and backend, seconds and speedup at each thread count, and
+/// whether 2 threads reach the target.
+fn every_row(t: &crate::Table) -> anyhow::Result<String> {
+    let find = |s: &str, b: &str, n: &str| -> anyhow::Result<Option<usize>> {
+        for r in t.rows_where("scene", s)? {
+            if t.get(r, "backend")? == b && t.get(r, "threads")? == n {
+                return Ok(Some(r));
+            }
+        }
+        Ok(None)
+    };
     let threads = t.distinct("threads")?;
     let mut header = vec!["scene".to_owned(), "backend".to_owned()];
     header.extend(threads.iter().map(|n| format!("{n} threads")));
@@ -248,9 +278,44 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
         }
     }
     let h: Vec<&str> = header.iter().map(String::as_str).collect();
-    md.push_str(&markdown_table(&h, &rows));
-    if let Some(p) = ctx.plot_markdown("table5_threads", "speedup over 1 thread") {
-        md.push_str(&p);
+    Ok(markdown_table(&h, &rows))
+}
+
+/// The same experiment run on a machine with more cores, into `manycore/` beside these
+/// results (`scripts/reproduce.sh --only table5 --out results/manycore` there), if it exists:
+/// its machine and every row.
+fn manycore_report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
+    let Some(t) = ctx.read_csv(&format!("{MANYCORE}/{FILE}"), HEADER)? else {
+        return Ok(None);
+    };
+    let machine = std::fs::read_to_string(ctx.path(&format!("{MANYCORE}/machine.json")))
+        .ok()
+        .and_then(|text| serde_json::from_str::<serde_json::Value>(&text).ok());
+    let about = match &machine {
+        Some(m) => format!(
+            "{} with {} cores ({} hardware threads), git revision `{}`, {}",
+            m["cpu"].as_str().unwrap_or("?"),
+            m["cores"],
+            m["threads"],
+            m["git_rev"].as_str().unwrap_or("?"),
+            m["date"].as_str().unwrap_or("?"),
+        ),
+        None => "a machine whose `machine.json` is missing".to_owned(),
+    };
+    let mut md = format!(
+        "\n### On a machine with more cores\n\nThe same frames, backends and protocol on {about} \
+         (`{MANYCORE}/`: its own [README]({MANYCORE}/README.md), `machine.json` and CSV). A \
+         machine of this project has 2 cores; this one was lent for a session, so its rows are \
+         from another CPU and another build date than the rest of this report.\n\n"
+    );
+    md.push_str(&every_row(&t)?);
+    if ctx
+        .path(&format!("{MANYCORE}/plots/table5_threads.png"))
+        .is_file()
+    {
+        md.push_str(&format!(
+            "\n![speedup over 1 thread, more cores]({MANYCORE}/plots/table5_threads.png)\n"
+        ));
     }
     Ok(Some(md))
 }
@@ -263,7 +328,8 @@ mod tests {
     fn thread_counts_are_deduplicated() {
         assert_eq!(thread_counts(1), [1, 2]);
         assert_eq!(thread_counts(2), [1, 2]);
-        assert_eq!(thread_counts(16), [1, 2, 16]);
+        assert_eq!(thread_counts(16), [1, 2, 4, 8, 16]);
+        assert_eq!(thread_counts(12), [1, 2, 4, 8, 12]);
     }
 
     #[test]
