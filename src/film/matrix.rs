@@ -2,6 +2,8 @@
 //! sum and a sample count per pixel; a pixel's samples go alternately to one and the other,
 //! and the difference of their estimates measures the accuracy.
 
+use rayon::prelude::*;
+
 use super::accuracy::display_difference;
 use super::superpixel::Superpixels;
 use crate::tonemap::ToneMap;
@@ -30,11 +32,16 @@ pub struct ScreenMatrix {
 }
 
 impl ScreenMatrix {
+    /// Zeroed by writing, in parallel on the current rayon pool. `vec![0; n]` would map the
+    /// system's shared zero page, and the first `+=` of each page would then copy it and
+    /// flush the other threads' TLBs (an interrupt to every CPU of the pool, per page):
+    /// with the samples filed in parallel, that made 2 threads slower than 1.
     fn new(pixels: usize) -> ScreenMatrix {
-        ScreenMatrix {
-            sum: vec![[0.0; 3]; pixels],
-            count: vec![0; pixels],
-        }
+        let mut sum = Vec::with_capacity(pixels);
+        sum.par_extend(rayon::iter::repeat_n([0.0f64; 3], pixels));
+        let mut count = Vec::with_capacity(pixels);
+        count.par_extend(rayon::iter::repeat_n(0u32, pixels));
+        ScreenMatrix { sum, count }
     }
     /// Mean colour of pixel `p` (zero without samples).
     pub fn mean(&self, p: usize) -> [f32; 3] {
@@ -85,14 +92,22 @@ impl Film {
         self.matrices[0].count[p] + self.matrices[1].count[p]
     }
 
-    /// Adds sample number `k` of pixel `p` to matrix [`matrix_of`]`(p, k)`.
-    #[inline]
-    pub(crate) fn add(&mut self, p: usize, k: u64, c: [f32; 3]) {
-        let m = &mut self.matrices[matrix_of(p as u64, k)];
-        m.count[p] += 1;
-        for (s, v) in m.sum[p].iter_mut().zip(c) {
-            *s += v as f64;
-        }
+    /// The film cut into bands of `rows` whole rows each (the last may be shorter), in order
+    /// from the top: each owns its rows of both matrices, so bands can be filled in parallel.
+    pub(crate) fn bands(&mut self, rows: u32) -> Vec<FilmBand<'_>> {
+        let n = rows.max(1) as usize * self.width as usize;
+        let [a, b] = &mut self.matrices;
+        a.sum
+            .chunks_mut(n)
+            .zip(a.count.chunks_mut(n))
+            .zip(b.sum.chunks_mut(n).zip(b.count.chunks_mut(n)))
+            .enumerate()
+            .map(|(i, ((sa, ca), (sb, cb)))| FilmBand {
+                first: i * n,
+                sums: [sa, sb],
+                counts: [ca, cb],
+            })
+            .collect()
     }
 
     /// The display difference of the two matrices' estimates at `p`, or `None` unless both
@@ -125,5 +140,28 @@ impl Film {
     /// The whole image, row by row.
     pub fn estimate(&self) -> Vec<[f32; 3]> {
         (0..self.pixels()).map(|p| self.pixel(p)).collect()
+    }
+}
+
+/// Whole rows of a [`Film`]'s two matrices (from [`Film::bands`]), where the samples of
+/// pixels in these rows are filed.
+pub(crate) struct FilmBand<'a> {
+    /// The pixel index of the band's first pixel.
+    first: usize,
+    sums: [&'a mut [[f64; 3]]; 2],
+    counts: [&'a mut [u32]; 2],
+}
+
+impl FilmBand<'_> {
+    /// Adds sample number `k` of pixel `p` (a pixel of this band) to matrix
+    /// [`matrix_of`]`(p, k)`.
+    #[inline]
+    pub(crate) fn add(&mut self, p: usize, k: u64, c: [f32; 3]) {
+        let m = matrix_of(p as u64, k);
+        let i = p - self.first;
+        self.counts[m][i] += 1;
+        for (s, v) in self.sums[m][i].iter_mut().zip(c) {
+            *s += v as f64;
+        }
     }
 }

@@ -136,7 +136,7 @@ pub fn render<T: SampleTracer>(
         next_index = end;
         pass += 1;
 
-        let outs = tiles
+        let mut outs = tiles
             .par_iter()
             .map(|&(tx, ty)| {
                 let job = PassJob {
@@ -154,6 +154,29 @@ pub fn render<T: SampleTracer>(
             })
             .collect::<Result<Vec<_>, _>>()?;
 
+        // Filing the samples: a band of the film per row of tiles, in parallel (each pixel
+        // still gets its samples in trace order, so the sums do not depend on the threads).
+        let per_row = w.div_ceil(tile.width()) as usize;
+        let mut bands = film.bands(tile.height());
+        let fixed = bands
+            .par_iter_mut()
+            .zip(outs.par_chunks_mut(per_row))
+            .map(|(band, row)| {
+                let mut f = Fixups::default();
+                for o in row {
+                    for &(p, k, c) in &o.samples {
+                        band.add(p as usize, k, fix(c, &mut f));
+                    }
+                    o.samples = Vec::new(); // freed here, in parallel
+                }
+                f
+            })
+            .collect::<Vec<_>>();
+        drop(bands);
+        for f in fixed {
+            fixups.non_finite += f.non_finite;
+            fixups.negative += f.negative;
+        }
         let mut traced = 0;
         let mut skipped = 0;
         let mut this_pass = 0;
@@ -161,10 +184,6 @@ pub fn render<T: SampleTracer>(
         let mut coh_sum = 0.0;
         let mut coh_n = 0u64;
         for o in outs {
-            for (p, k, c) in o.samples {
-                let c = fix(c, &mut fixups);
-                film.add(p as usize, k, c);
-            }
             this_pass += o.rays;
             traced += o.traced;
             skipped += o.skipped;
@@ -271,55 +290,89 @@ fn mark_interpolated(film: &mut Film, accuracy: f32) {
 /// pixel is done when it is interpolated, or when it and every neighbour of its 3x3
 /// neighbourhood sampled in both matrices have a matrix difference within `accuracy`
 /// (neighbours make edges robust: two estimates of an edge pixel may agree by chance).
+/// Rows in parallel; the answer does not depend on the threads.
 fn needed(film: &Film, accuracy: f32, cap: u32) -> (Vec<bool>, bool) {
-    let (w, h) = (film.width, film.height);
-    let errors: Vec<Option<f32>> = (0..film.pixels()).map(|p| film.error(p)).collect();
-    let mut capped = false;
+    let w = film.width;
+    let errors: Vec<Option<f32>> = (0..film.pixels())
+        .into_par_iter()
+        .map(|p| film.error(p))
+        .collect();
     let mut need = vec![false; film.pixels()];
-    for y in 0..h {
-        for x in 0..w {
-            let p = (y * w + x) as usize;
-            if film.interpolated[p] {
-                continue;
-            }
-            let met = errors[p].is_some() && {
-                let mut e = 0.0f32;
-                for ny in y.saturating_sub(1)..(y + 2).min(h) {
-                    for nx in x.saturating_sub(1)..(x + 2).min(w) {
-                        if let Some(q) = errors[(ny * w + nx) as usize] {
-                            e = e.max(q);
-                        }
-                    }
-                }
-                e <= accuracy
-            };
-            if met {
-                continue;
-            }
-            if film.samples(p) >= cap {
-                capped = true;
-            } else {
-                need[p] = true;
-            }
-        }
-    }
+    let capped = need
+        .par_chunks_mut(w as usize)
+        .enumerate()
+        .map(|(y, row)| needed_row(film, &errors, accuracy, cap, y as u32, row))
+        .reduce(|| false, |a, b| a | b);
     (need, capped)
 }
 
-fn mean_error(film: &Film) -> f64 {
-    let (mut s, mut n) = (0.0f64, 0u64);
-    for p in 0..film.pixels() {
-        if let Some(e) = film.error(p) {
-            s += e.min(1e6) as f64;
-            n += 1;
+/// [`needed`] for row `y`: fills `need` (the row) and says whether a pixel of it stopped at
+/// the cap.
+fn needed_row(
+    film: &Film,
+    errors: &[Option<f32>],
+    accuracy: f32,
+    cap: u32,
+    y: u32,
+    need: &mut [bool],
+) -> bool {
+    let (w, h) = (film.width, film.height);
+    let mut capped = false;
+    for x in 0..w {
+        let p = (y * w + x) as usize;
+        if film.interpolated[p] {
+            continue;
+        }
+        let met = errors[p].is_some() && {
+            let mut e = 0.0f32;
+            for ny in y.saturating_sub(1)..(y + 2).min(h) {
+                for nx in x.saturating_sub(1)..(x + 2).min(w) {
+                    if let Some(q) = errors[(ny * w + nx) as usize] {
+                        e = e.max(q);
+                    }
+                }
+            }
+            e <= accuracy
+        };
+        if met {
+            continue;
+        }
+        if film.samples(p) >= cap {
+            capped = true;
+        } else {
+            need[x as usize] = true;
         }
     }
+    capped
+}
+
+/// The mean display difference of the pixels sampled in both matrices: rows in parallel,
+/// their sums added in row order (the same figure for any thread count).
+fn mean_error(film: &Film) -> f64 {
+    let w = film.width as usize;
+    let rows: Vec<(f64, u64)> = (0..film.height as usize)
+        .into_par_iter()
+        .map(|y| {
+            let (mut s, mut n) = (0.0f64, 0u64);
+            for p in y * w..(y + 1) * w {
+                if let Some(e) = film.error(p) {
+                    s += e.min(1e6) as f64;
+                    n += 1;
+                }
+            }
+            (s, n)
+        })
+        .collect();
+    let (s, n) = rows
+        .iter()
+        .fold((0.0f64, 0u64), |(s, n), &(rs, rn)| (s + rs, n + rn));
     if n == 0 { f64::NAN } else { s / n as f64 }
 }
 
 /// Fraction of pixels sampled or interpolated (the `done` of pre-render and uniform passes).
 fn covered_fraction(film: &Film) -> f64 {
     let n = (0..film.pixels())
+        .into_par_iter()
         .filter(|&p| film.interpolated[p] || film.samples(p) > 0)
         .count();
     n as f64 / film.pixels() as f64
@@ -440,7 +493,8 @@ fn pass_tile<T: SampleTracer>(
             let (cx, cy) = (cx / n as f64, cy / n as f64);
             for m in 0..lanes {
                 if bits >> m & 1 == 1 {
-                    let d = (p.xs[m] as f64 - cx).hypot(p.ys[m] as f64 - cy);
+                    let (dx, dy) = (p.xs[m] as f64 - cx, p.ys[m] as f64 - cy);
+                    let d = (dx * dx + dy * dy).sqrt();
                     out.dist_sum += d;
                     out.dist_n += 1;
                     out.dist_max = out.dist_max.max(d);
