@@ -219,11 +219,17 @@ fn cpuid_brand() -> Option<String> {
     None
 }
 
-/// `git rev-parse HEAD` (+ `-dirty`) of the source tree this binary was built from, or of the
-/// current directory when that tree is gone; without git there (a binary copied to another
-/// machine with a plain copy of the tree), `$COHERENT_GIT_REV` as the person who copied it
-/// gives it, else `unknown`.
+/// `$COHERENT_GIT_REV` where it is set (a binary copied to another machine, beside a copy of
+/// the tree whose git metadata need not match: the person who copied it says what it was
+/// built from); else `git rev-parse HEAD` (+ `-dirty`) of the source tree this binary was
+/// built from, or of the current directory when that tree is gone; `unknown` without git.
 fn git_rev() -> String {
+    if let Some(rev) = std::env::var("COHERENT_GIT_REV")
+        .ok()
+        .filter(|rev| !rev.trim().is_empty())
+    {
+        return rev.trim().to_owned();
+    }
     let source = Path::new(env!("CARGO_MANIFEST_DIR"));
     let dir = if source.is_dir() {
         source.to_path_buf()
@@ -242,10 +248,7 @@ fn git_rev() -> String {
             .then(|| String::from_utf8_lossy(&out.stdout).trim().to_owned())
     };
     let Some(rev) = git(&["rev-parse", "HEAD"]).filter(|rev| !rev.is_empty()) else {
-        return std::env::var("COHERENT_GIT_REV")
-            .ok()
-            .filter(|rev| !rev.trim().is_empty())
-            .unwrap_or_else(|| "unknown".to_owned());
+        return "unknown".to_owned();
     };
     match git(&["status", "--porcelain", "--untracked-files=no"]) {
         Some(changes) if !changes.is_empty() => format!("{rev}-dirty"),
