@@ -335,6 +335,9 @@ const FAMILIES: [(usize, Option<&str>, Option<&str>, &str); 3] = [
 /// The portability target: pulp's time at most this times the hand-written one's.
 const PORTABILITY_TARGET: f64 = 1.15;
 
+/// The same experiment run on another machine, lent for a session (see `table5`).
+const MANYCORE_FILE: &str = "manycore/kernels.csv";
+
 /// Seconds of `(kernel, backend)` in a `kernels.csv` table.
 fn seconds_of(t: &crate::Table, kernel: &str, backend: &str) -> anyhow::Result<Option<f64>> {
     for r in t.rows_where("kernel", kernel)? {
@@ -399,8 +402,10 @@ fn portability_report(ctx: &Ctx, t: &crate::Table) -> anyhow::Result<String> {
 
 "
     );
+    let manycore = ctx.read_csv(MANYCORE_FILE, HEADER).ok().flatten();
     let builds: Vec<(&str, &crate::Table)> = std::iter::once(("default", t))
         .chain(native.as_ref().map(|n| ("native", n)))
+        .chain(manycore.as_ref().map(|m| ("default, other CPU", m)))
         .collect();
     let mut rows = Vec::new();
     for kernel in PORTABILITY_KERNELS {
@@ -670,6 +675,14 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     }
     if let Some(p) = ctx.plot_markdown("kernels_speedup", "speedup per backend") {
         md.push_str(&p);
+    }
+    if let Some(m) = ctx.read_csv(MANYCORE_FILE, HEADER)? {
+        md.push_str(&format!(
+            "\nThe same run (default build) on {}, lent for a session (`manycore/`, with its own \
+             `machine.json`); speedup over scalar there:\n\n",
+            crate::table5::manycore_machine(ctx)
+        ));
+        md.push_str(&m.pivot("kernel", "backend", "speedup")?);
     }
     md.push_str(&portability_report(ctx, &t)?);
     if let Some(acc) = ctx.read_csv("kernels_accuracy.csv", ACCURACY_HEADER)? {

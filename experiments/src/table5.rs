@@ -281,17 +281,12 @@ fn every_row(t: &crate::Table) -> anyhow::Result<String> {
     Ok(markdown_table(&h, &rows))
 }
 
-/// The same experiment run on a machine with more cores, into `manycore/` beside these
-/// results (`scripts/reproduce.sh --only table5 --out results/manycore` there), if it exists:
-/// its machine and every row.
-fn manycore_report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
-    let Some(t) = ctx.read_csv(&format!("{MANYCORE}/{FILE}"), HEADER)? else {
-        return Ok(None);
-    };
+/// The machine of the run in `manycore/` (its `machine.json`), in words.
+pub fn manycore_machine(ctx: &Ctx) -> String {
     let machine = std::fs::read_to_string(ctx.path(&format!("{MANYCORE}/machine.json")))
         .ok()
         .and_then(|text| serde_json::from_str::<serde_json::Value>(&text).ok());
-    let about = match &machine {
+    match &machine {
         Some(m) => format!(
             "{} with {} cores ({} hardware threads), git revision `{}`, {}",
             m["cpu"].as_str().unwrap_or("?"),
@@ -301,7 +296,17 @@ fn manycore_report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
             m["date"].as_str().unwrap_or("?"),
         ),
         None => "a machine whose `machine.json` is missing".to_owned(),
+    }
+}
+
+/// The same experiment run on a machine with more cores, into `manycore/` beside these
+/// results (`scripts/reproduce.sh --only table5 --out results/manycore` there), if it exists:
+/// its machine and every row.
+fn manycore_report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
+    let Some(t) = ctx.read_csv(&format!("{MANYCORE}/{FILE}"), HEADER)? else {
+        return Ok(None);
     };
+    let about = manycore_machine(ctx);
     let mut md = format!(
         "\n### On a machine with more cores\n\nThe same frames, backends and protocol on {about} \
          (`{MANYCORE}/`: its own [README]({MANYCORE}/README.md), `machine.json` and CSV). A \
@@ -352,5 +357,20 @@ mod tests {
         assert_eq!(t.f64(0, "speedup").unwrap(), 1.0);
         let md = report(&ctx).unwrap().unwrap();
         assert!(md.contains("| spdemo | 2.63 |"), "{md}");
+        assert!(!md.contains("more cores"), "{md}");
+        // A run from another machine in `manycore/` is shown with that machine.
+        std::fs::create_dir(dir.path().join(MANYCORE)).unwrap();
+        std::fs::copy(ctx.path(FILE), ctx.path(&format!("{MANYCORE}/{FILE}"))).unwrap();
+        std::fs::write(
+            ctx.path(&format!("{MANYCORE}/machine.json")),
+            r#"{"cpu": "Big CPU", "cores": 16, "threads": 32, "git_rev": "abc", "date": "d"}"#,
+        )
+        .unwrap();
+        let md = report(&ctx).unwrap().unwrap();
+        assert!(md.contains("### On a machine with more cores"), "{md}");
+        assert!(
+            md.contains("Big CPU with 16 cores (32 hardware threads)"),
+            "{md}"
+        );
     }
 }
