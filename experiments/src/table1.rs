@@ -386,6 +386,14 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     }
     let header: Vec<&str> = header.iter().map(String::as_str).collect();
     md.push_str(&markdown_table(&header, &rows));
+    if let Some(m) = ctx.read_csv("manycore/table1_bdf.csv", HEADER)? {
+        md.push_str(&format!(
+            "\nThe same run on {}, lent for a session (`manycore/`, with its own \
+             `machine.json`); speedup over scalar there:\n\n",
+            crate::table5::manycore_machine(ctx)
+        ));
+        md.push_str(&m.pivot("calls", "backend", "speedup")?);
+    }
 
     // The project's targets, against the largest call count measured.
     if let Some(last) = t.distinct("calls")?.last() {
