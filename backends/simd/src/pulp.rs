@@ -10,17 +10,26 @@
 //! `avx2`/`avx512` backends do the same work with intrinsics.
 //!
 //! pulp 0.22 has no operation for some of the lane trait; these are written here on top of
-//! pulp, portably, and keep the trait's semantics bit for bit (checked by `tests/lanes.rs`):
-//! - gathers: lane by lane through an array (pulp has no gather);
-//! - `floor`/`round`: the add-2^23 trick with pulp's add/sub/compare/select;
-//! - `i32 -> f32`: the two 16-bit halves through the 2^23 exponent trick, one rounding;
-//! - `f32 -> i32` (truncating, out of range to `i32::MIN`): from the exponent and mantissa
-//!   bits with pulp's variable shifts;
+//! pulp, portably, and keep the trait's semantics bit for bit (checked by `tests/lanes.rs`).
+//! Most go lane by lane through an array with plain Rust (`f32::floor`, `as f32`, `if a < b`):
+//! inside the `#[target_feature]` function LLVM compiles such a loop into the one vector
+//! instruction the target has (`vroundps`, `vcvtdq2ps`, `vminps`, ...), and on a target without
+//! one it is still correct. The hand-built versions of these on pulp's integer operations,
+//! used before, made pulp8 1.3-2.0x slower than the hand-written avx2 on exp, log and the BDF;
+//! through arrays it is 1.0-1.4x.
+//! - gathers: lane by lane through an array after one vector bounds check (pulp has no
+//!   gather; LLVM does not make one of the loop either, so this is what portability costs);
+//! - `floor`/`round`: `f32::floor` / `f32::round_ties_even` through an array, lanes without a
+//!   fraction kept as they are;
+//! - `i32 -> f32`: `as f32` through an array;
+//! - `f32 -> i32` (truncating, out of range to `i32::MIN`): `to_int_unchecked` under a range
+//!   check through an array;
 //! - arithmetic `>>`: the logical shift of `x ^ sign` xor `sign`;
-//! - `min`/`max`: compare and select (pulp's `min_f32s` follows the target's NaN rule);
+//! - `min`/`max`: `if a < b { a } else { b }` through arrays (pulp's `min_f32s` follows the
+//!   target's NaN rule, not the trait's);
 //! - `rsqrt`/`recip`: exact (`1 / sqrt`, `1 /`; pulp has no estimate instructions);
-//! - mask `any`/`all`/`bitmask`: the mask as 0.0/1.0 (or per-lane powers of two) summed with
-//!   pulp's `reduce_sum_f32s` (pulp has no movemask);
+//! - mask `any`/`all`/`bitmask`: the bits of pulp's mask type where it is a bit per lane
+//!   (AVX-512), else an or/and over the lanes through an array (pulp has no movemask);
 //! - `store_masked`: load, select, store; `reduce_min`/`reduce_max`: lane by lane.
 //!
 //! Every method is `#[inline(always)]` so that it compiles inside the `#[target_feature]`
@@ -92,25 +101,6 @@ const IOTA: [i32; MAX_LANES] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14
 const LANE_BITS: [i32; MAX_LANES] = [
     1, 2, 4, 8, 16, 32, 64, 128, 256, 512, 1024, 2048, 4096, 8192, 16384, 32768,
 ];
-/// Lane `i` holds `2^i` as `f32` bits.
-const LANE_POW2: [u32; MAX_LANES] = [
-    0x3f80_0000,
-    0x4000_0000,
-    0x4080_0000,
-    0x4100_0000,
-    0x4180_0000,
-    0x4200_0000,
-    0x4280_0000,
-    0x4300_0000,
-    0x4380_0000,
-    0x4400_0000,
-    0x4480_0000,
-    0x4500_0000,
-    0x4580_0000,
-    0x4600_0000,
-    0x4680_0000,
-    0x4700_0000,
-];
 
 impl<S: Simd> PF32<S> {
     #[inline(always)]
@@ -126,6 +116,25 @@ impl<S: Simd> PF32<S> {
         let mut a = [0.0; MAX_LANES];
         self.store(&mut a);
         a
+    }
+    /// `f` applied lane by lane through an array.
+    #[inline(always)]
+    fn map(self, f: impl Fn(f32) -> f32) -> Self {
+        let mut a = self.to_array();
+        for x in a.iter_mut().take(S::F32_LANES) {
+            *x = f(*x);
+        }
+        self.w(S::as_simd_f32s(&a[..S::F32_LANES]).0[0])
+    }
+    /// `f` applied lane by lane to two vectors through arrays.
+    #[inline(always)]
+    fn zip(self, o: Self, f: impl Fn(f32, f32) -> f32) -> Self {
+        let mut a = self.to_array();
+        let b = o.to_array();
+        for (x, &y) in a.iter_mut().zip(&b).take(S::F32_LANES) {
+            *x = f(*x, y);
+        }
+        self.w(S::as_simd_f32s(&a[..S::F32_LANES]).0[0])
     }
     /// Lanes below 2^23 in magnitude (not NaN): the ones with a fraction to round.
     #[inline(always)]
@@ -149,6 +158,25 @@ impl<S: Simd> PI32<S> {
         self.store(&mut a);
         a
     }
+    /// The lanes as an array, after checking (one vector compare) that every one lies in
+    /// `0..len`; panics naming the first index outside it.
+    #[inline(always)]
+    fn checked(self, len: usize) -> [i32; MAX_LANES] {
+        let s = self.1;
+        let len = len.min(i32::MAX as usize) as u32;
+        // as u32, a negative index is above every `len`.
+        let inside = PM32(s.less_than_u32s(self.u(), s.splat_u32s(len)), s);
+        let ix = self.to_array();
+        if !inside.all() {
+            let bad = ix[..S::I32_LANES]
+                .iter()
+                .find(|&&i| i < 0 || i as u32 >= len)
+                .copied()
+                .unwrap_or(-1);
+            panic!("gather index {bad} outside a table of {len}");
+        }
+        ix
+    }
     /// Logical right shift by a per-lane amount (below 32).
     #[inline(always)]
     fn shr_dyn(self, n: S::u32s) -> Self {
@@ -156,11 +184,26 @@ impl<S: Simd> PI32<S> {
     }
 }
 impl<S: Simd> PM32<S> {
-    /// The mask as `f32` lanes: `x` where on, `0.0` where off.
+    /// The mask's bits, where pulp's mask type is a bit per lane (AVX-512's `V4`: a `u16`;
+    /// its scalar `bool`); `None` where it is a vector of all-ones/zero lanes (`V3`). The
+    /// size is known at compile time, so only one arm is compiled.
     #[inline(always)]
-    fn sum_of(self, x: S::f32s) -> f32 {
+    fn bits(self) -> Option<u32> {
+        let bytes = bytemuck::bytes_of(&self.0);
+        match bytes.len() {
+            1 => Some(u32::from(bytes[0])),
+            2 => Some(u32::from(u16::from_le_bytes([bytes[0], bytes[1]]))),
+            _ => None,
+        }
+    }
+    /// The mask as an array of `u32` lanes: all ones where on, 0 where off.
+    #[inline(always)]
+    fn lanes(self) -> [u32; MAX_LANES] {
         let s = self.1;
-        s.reduce_sum_f32s(s.select_f32s(self.0, x, s.splat_f32s(0.0)))
+        let v = s.select_u32s(self.0, s.splat_u32s(!0), s.splat_u32s(0));
+        let mut a = [0u32; MAX_LANES];
+        S::as_mut_simd_u32s(&mut a[..S::U32_LANES]).0[0] = v;
+        a
     }
 }
 
@@ -221,38 +264,41 @@ impl<S: Simd> Lanes for PulpLanes<S> {
         let b = s.and_i32s(s.splat_i32s(bits as i32), lanes);
         PM32(s.equal_i32s(b, lanes), s)
     }
-    /// Lane by lane through an array (pulp has no gather).
+    /// Lane by lane through an array (pulp has no gather), after one vector bounds check.
     #[inline(always)]
     fn gather(self, table: &[f32], idx: PI32<S>) -> PF32<S> {
-        let ix = idx.to_array();
+        let ix = idx.checked(table.len());
         let mut out = [0.0f32; MAX_LANES];
-        for i in 0..Self::N {
-            out[i] = table[usize::try_from(ix[i]).unwrap_or(usize::MAX)];
+        for (o, &i) in out.iter_mut().zip(&ix).take(Self::N) {
+            // SAFETY: `checked` proved every index to lie in `0..table.len()`.
+            *o = unsafe { *table.get_unchecked(i as usize) };
         }
         self.load(&out)
     }
-    /// Lane by lane through an array (pulp has no gather).
+    /// Lane by lane through an array (pulp has no gather), after one vector bounds check.
     #[inline(always)]
     fn gather_u32(self, table: &[u32], idx: PI32<S>) -> PI32<S> {
-        let ix = idx.to_array();
+        let ix = idx.checked(table.len());
         let mut out = [0i32; MAX_LANES];
-        for i in 0..Self::N {
-            out[i] = table[usize::try_from(ix[i]).unwrap_or(usize::MAX)] as i32;
+        for (o, &i) in out.iter_mut().zip(&ix).take(Self::N) {
+            // SAFETY: `checked` proved every index to lie in `0..table.len()`.
+            *o = unsafe { *table.get_unchecked(i as usize) } as i32;
         }
         self.load_i32(&out)
     }
     /// Lane by lane through two arrays: both ends of each interval in one pass.
     #[inline(always)]
     fn gather2(self, table: &[f32], idx: PI32<S>) -> (PF32<S>, PF32<S>) {
-        let n = table.len().saturating_sub(1);
-        let ix = idx.to_array();
+        let ix = idx.checked(table.len().saturating_sub(1));
         let mut lo = [0.0f32; MAX_LANES];
         let mut hi = [0.0f32; MAX_LANES];
         for i in 0..Self::N {
-            let j = usize::try_from(ix[i]).unwrap_or(usize::MAX);
-            assert!(j < n, "gather index {} outside a table of {n}", ix[i]);
-            lo[i] = table[j];
-            hi[i] = table[j + 1];
+            let j = ix[i] as usize;
+            // SAFETY: `checked` proved `j + 1 < table.len()`.
+            unsafe {
+                lo[i] = *table.get_unchecked(j);
+                hi[i] = *table.get_unchecked(j + 1);
+            }
         }
         (self.load(&lo), self.load(&hi))
     }
@@ -324,13 +370,16 @@ impl<S: Simd> SimdF32 for PF32<S> {
     fn ne(self, o: Self) -> PM32<S> {
         !self.eq(o)
     }
+    /// Lane by lane through arrays: LLVM compiles `if a < b { a } else { b }` into one vector
+    /// `min` where the target's has this NaN rule (x86); pulp's compare and select stay two.
     #[inline(always)]
     fn min(self, o: Self) -> Self {
-        self.lt(o).select(self, o)
+        self.zip(o, |a, b| if a < b { a } else { b })
     }
+    /// As `min`.
     #[inline(always)]
     fn max(self, o: Self) -> Self {
-        self.gt(o).select(self, o)
+        self.zip(o, |a, b| if a > b { a } else { b })
     }
     #[inline(always)]
     fn abs(self) -> Self {
@@ -355,49 +404,40 @@ impl<S: Simd> SimdF32 for PF32<S> {
     fn recip(self) -> Self {
         self.w(self.1.div_f32s(self.splat(1.0), self.0))
     }
+    /// Lane by lane through an array with `f32::floor` (pulp has no rounding); LLVM compiles
+    /// the loop into one vector rounding inside the `#[target_feature]` kernel. Lanes without
+    /// a fraction (and NaN) are kept as they are, bit for bit.
     #[inline(always)]
     fn floor(self) -> Self {
-        // round to nearest, then one down where that went up; `r - 1` keeps -0 for -0.
-        let r = self.round();
-        let s = self.1;
-        let down = s.sub_f32s(r.0, self.splat(1.0));
-        // NaN and |x| >= 2^23 come back from `round` unchanged and are not above themselves.
-        self.w(s.select_f32s(s.greater_than_f32s(r.0, self.0), down, r.0))
+        let r = self.map(f32::floor);
+        self.w(self.1.select_f32s(self.has_fraction(), r.0, self.0))
     }
+    /// Lane by lane through an array with `f32::round_ties_even` (as `floor`).
     #[inline(always)]
     fn round(self) -> Self {
-        // |x| + 2^23 - 2^23 rounds |x| < 2^23 to nearest even; copy the sign back (keeps -0).
-        let s = self.1;
-        let a = SimdF32::abs(self).0;
-        let r = s.sub_f32s(s.add_f32s(a, self.splat(TWO23)), self.splat(TWO23));
-        let r = self.w(r).copysign(self);
-        self.w(s.select_f32s(self.has_fraction(), r.0, self.0))
+        let r = self.map(f32::round_ties_even);
+        self.w(self.1.select_f32s(self.has_fraction(), r.0, self.0))
     }
     #[inline(always)]
     fn mul_add(self, b: Self, c: Self) -> Self {
         self.w(self.1.mul_add_f32s(self.0, b.0, c.0))
     }
+    /// Lane by lane through an array (pulp has no conversion): truncation where the value is
+    /// in `i32`'s range, `i32::MIN` elsewhere (NaN, infinities), as x86's `cvttps2dq`; LLVM
+    /// compiles the loop into the vector conversion and one select.
     #[inline(always)]
     fn to_i32(self) -> PI32<S> {
-        // From the bits: |x| = m * 2^(e - 150) with the implicit bit in m.
-        let s = self.1;
-        let bits = self.to_bits();
-        let e = (bits.shr_logical(23) & bits.splat_same(0xff)).u();
-        let m = (bits & bits.splat_same(0x007f_ffff)) | bits.splat_same(0x0080_0000);
-        let sh_left = s.sub_u32s(e, s.splat_u32s(150)); // e >= 150: m << (e - 150)
-        let sh_right = s.sub_u32s(s.splat_u32s(150), e); // e < 150: m >> (150 - e)
-        let left = PI32::from_u(s, s.wrapping_dyn_shl_u32s(m.u(), sh_left));
-        let right = m.shr_dyn(sh_right);
-        let big = PI32(s.transmute_i32s_u32s(e), s).gt(bits.splat_same(149));
-        let mag = big.select_i32(left, right);
-        let tiny = PI32(s.transmute_i32s_u32s(e), s).lt(bits.splat_same(127)); // |x| < 1
-        let mag = tiny.select_i32(bits.splat_same(0), mag);
-        // sign: (mag ^ sgn) - sgn with sgn all ones for negative x
-        let sgn = bits.splat_same(0) - bits.shr_logical(31);
-        let v = (mag ^ sgn) - sgn;
-        // |x| >= 2^31 (e >= 158), inf and NaN: "integer indefinite"
-        let out = PI32(s.transmute_i32s_u32s(e), s).gt(bits.splat_same(157));
-        out.select_i32(bits.splat_same(i32::MIN), v)
+        let a = self.to_array();
+        let mut out = [0i32; MAX_LANES];
+        for (o, &x) in out.iter_mut().zip(&a).take(S::F32_LANES) {
+            *o = if (-2_147_483_648.0..2_147_483_648.0).contains(&x) {
+                // SAFETY: `x` is finite and truncates to a value inside `i32`'s range.
+                unsafe { x.to_int_unchecked::<i32>() }
+            } else {
+                i32::MIN
+            };
+        }
+        PI32(S::as_simd_i32s(&out[..S::I32_LANES]).0[0], self.1)
     }
     #[inline(always)]
     fn to_bits(self) -> PI32<S> {
@@ -452,11 +492,31 @@ impl<S: Simd> SimdMask for PM32<S> {
     }
     #[inline(always)]
     fn any(self) -> bool {
-        self.sum_of(self.1.splat_f32s(1.0)) != 0.0
+        match self.bits() {
+            Some(bits) => bits != 0,
+            // an or over the lanes, which LLVM compiles into one vector test
+            None => {
+                self.lanes()
+                    .iter()
+                    .take(S::F32_LANES)
+                    .fold(0, |a, &x| a | x)
+                    != 0
+            }
+        }
     }
     #[inline(always)]
     fn all(self) -> bool {
-        self.sum_of(self.1.splat_f32s(1.0)) == S::F32_LANES as f32
+        match self.bits() {
+            Some(bits) => bits == u32::MAX >> (32 - S::F32_LANES),
+            // an and over the lanes, which LLVM compiles into one vector test
+            None => {
+                self.lanes()
+                    .iter()
+                    .take(S::F32_LANES)
+                    .fold(!0, |a, &x| a & x)
+                    == !0
+            }
+        }
     }
     #[inline(always)]
     fn none(self) -> bool {
@@ -464,8 +524,18 @@ impl<S: Simd> SimdMask for PM32<S> {
     }
     #[inline(always)]
     fn bitmask(self) -> u32 {
-        let (w, _) = S::as_simd_u32s(&LANE_POW2[..S::F32_LANES]);
-        self.sum_of(self.1.transmute_f32s_u32s(w[0])) as u32
+        match self.bits() {
+            Some(bits) => bits,
+            None => {
+                // each lane's sign, shifted to its place (a move-mask where LLVM sees it)
+                let m = self.lanes();
+                let mut bits = 0;
+                for (i, &x) in m.iter().enumerate().take(S::F32_LANES) {
+                    bits |= u32::from((x as i32) < 0) << i;
+                }
+                bits
+            }
+        }
     }
     #[inline(always)]
     fn and_not(self, o: Self) -> Self {
@@ -571,18 +641,16 @@ impl<S: Simd> SimdI32 for PI32<S> {
     fn max(self, o: Self) -> Self {
         PI32(self.1.max_i32s(self.0, o.0), self.1)
     }
-    /// The high and low 16 bits each convert exactly through the 2^23 exponent trick; their
-    /// sum `hi * 65536 + lo` is the one rounding (to nearest even).
+    /// Lane by lane through an array with `as f32` (pulp has no conversion; rounds to nearest
+    /// even); LLVM compiles the loop into the vector conversion.
     #[inline(always)]
     fn to_f32(self) -> PF32<S> {
-        let s = self.1;
-        let magic = self.splat_same(0x4b00_0000); // 2^23 as f32 bits
-        let lo = (self & self.splat_same(0xffff)) | magic;
-        let lo = s.sub_f32s(lo.bits_to_f32().0, s.splat_f32s(TWO23));
-        // hi = x >> 16 (arithmetic), offset by 2^15 to be non-negative
-        let hi = ((self >> 16) + self.splat_same(0x8000)) | magic;
-        let hi = s.sub_f32s(hi.bits_to_f32().0, s.splat_f32s(TWO23 + 32768.0));
-        PF32(s.add_f32s(s.mul_f32s(hi, s.splat_f32s(65536.0)), lo), s)
+        let a = self.to_array();
+        let mut out = [0.0f32; MAX_LANES];
+        for (o, &x) in out.iter_mut().zip(&a).take(S::I32_LANES) {
+            *o = x as f32;
+        }
+        PF32(S::as_simd_f32s(&out[..S::F32_LANES]).0[0], self.1)
     }
     #[inline(always)]
     fn bits_to_f32(self) -> PF32<S> {
