@@ -7,7 +7,9 @@
 #
 # This script finds such code in a release binary: every function, other than the intrinsics
 # themselves, that calls (or tail-calls) an out-of-line AVX/AVX2/FMA/AVX-512 intrinsic of
-# `core::arch`. It fails, listing them with their call counts, if there is any.
+# `core::arch`, and every function of ours or pulp's that calls libm's rounding (what the
+# pulp backend's lane-by-lane `floor`/`round` become outside the kernel). It fails, listing
+# them with their call counts, if there is any.
 # Usage: scripts/check-inlining.sh [BINARY]   (default: target/release/reproduce, built by
 # `scripts/reproduce.sh`; `cargo build --release -p coherent-experiments` builds it alone)
 set -euo pipefail
@@ -32,15 +34,20 @@ report=$(objdump -d --no-show-raw-insn -C "$bin" | awk '
     !intrinsic && /(call|jmp)/ && /core::core_arch::x86(_64)?::(avx|avx2|fma|avx512[a-z]*|f16c|bmi[12])::/ {
         calls[fn]++
     }
+    # The pulp backend rounds lane by lane with f32::floor / round_ties_even, which inside the
+    # kernel become one vroundps; out of line (no SSE4.1) each lane would call libm.
+    (fn ~ /coherent|pulp::/) && /(call|jmp)/ && /<(floorf|ceilf|truncf|rintf|nearbyintf|roundf|roundevenf)(@plt)?>/ {
+        calls[fn]++
+    }
     END { for (f in calls) printf "%6d  %s\n", calls[f], f }
 ' | sort -rn)
 
 if [[ -n "$report" ]]; then
     n=$(wc -l <<<"$report")
-    echo "check-inlining: $n function(s) in $bin call AVX intrinsics out of line (calls, function):"
+    echo "check-inlining: $n function(s) in $bin call AVX intrinsics or libm rounding out of line (calls, function):"
     echo "$report"
     echo "Inline them into the kernel (#[inline(always)] functions; no closures called twice," \
         "no array::map over lanes; see 'Kernels inside pulp must inline' in the README)." >&2
     exit 1
 fi
-echo "check-inlining: no out-of-line AVX intrinsic calls in $bin"
+echo "check-inlining: no out-of-line AVX intrinsic or libm rounding calls in $bin"

@@ -398,7 +398,7 @@ fn portability_report(ctx: &Ctx, t: &crate::Table) -> anyhow::Result<String> {
     let native = ctx.read_csv("native/kernels.csv", HEADER).ok().flatten();
     let mut md = format!(
         "
-**The cost of portability.** Per kernel and width, the speedup over scalar of the hand-written backend (sse, avx2, avx512: `core::arch` intrinsics), the pulp backend (pulp8, pulp16: one implementation on pulp's portable operations) and `wide`, and the time of pulp and of wide relative to the hand-written backend at the same width (1.00 = as fast; target for pulp: <= {PORTABILITY_TARGET:.2}). `wide` uses only the build's target features (SSE2 in the default build). Plots: `plots/portability_<kernel>`.
+**The cost of portability.** Per kernel and width, the speedup over scalar of the hand-written backend (sse, avx2, avx512: `core::arch` intrinsics), the pulp backend (pulp8, pulp16: one implementation on pulp's portable operations) and `wide`, and the time of pulp and of wide relative to the hand-written backend at the same width (1.00 = as fast; target for pulp: <= {PORTABILITY_TARGET:.2}). `wide` uses only the build's target features (SSE2 in the default build). pulp has no gather, rounding, conversion or move-mask: the pulp backend writes these lane by lane through arrays in plain Rust, which LLVM turns into the vector instruction for all but the gathers, so the kernels that read tables (exp, log, pow, texture, BDF, Tumblin's pow) are where pulp trails. Plots: `plots/portability_<kernel>`.
 
 "
     );
