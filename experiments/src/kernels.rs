@@ -403,6 +403,12 @@ fn portability_report(ctx: &Ctx, t: &crate::Table) -> anyhow::Result<String> {
 "
     );
     let manycore = ctx.read_csv(MANYCORE_FILE, HEADER).ok().flatten();
+    if manycore.is_some() {
+        md.push_str(&format!(
+            "Rows \"default, other CPU\" are `{MANYCORE_FILE}`: the code of that run's revision, on {}.\n\n",
+            crate::table5::manycore_machine(ctx)
+        ));
+    }
     let builds: Vec<(&str, &crate::Table)> = std::iter::once(("default", t))
         .chain(native.as_ref().map(|n| ("native", n)))
         .chain(manycore.as_ref().map(|m| ("default, other CPU", m)))
