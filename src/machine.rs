@@ -90,8 +90,8 @@ pub struct Machine {
     pub rustc: String,
     /// RUSTFLAGS of the build, space separated; empty when none.
     pub rustflags: String,
-    /// `git rev-parse HEAD` of the source tree, `-dirty` appended when tracked files were
-    /// modified; `unknown` without git.
+    /// `git rev-parse HEAD` of the source tree, `-dirty` appended when tracked files other
+    /// than `results/` were modified; `unknown` without git.
     pub git_rev: String,
     /// When this description was taken: UTC, ISO-8601 (`2026-11-21T19:30:00Z`).
     pub date: String,
@@ -250,7 +250,16 @@ fn git_rev() -> String {
     let Some(rev) = git(&["rev-parse", "HEAD"]).filter(|rev| !rev.is_empty()) else {
         return "unknown".to_owned();
     };
-    match git(&["status", "--porcelain", "--untracked-files=no"]) {
+    // `results/` is what `reproduce` writes, not what it was built from: a run after another
+    // in the same tree is not "dirty" for having the first one's output beside it.
+    match git(&[
+        "status",
+        "--porcelain",
+        "--untracked-files=no",
+        "--",
+        ":/",
+        ":(top,exclude)results",
+    ]) {
         Some(changes) if !changes.is_empty() => format!("{rev}-dirty"),
         _ => rev,
     }
