@@ -15,8 +15,8 @@
 //! inside the `#[target_feature]` function LLVM compiles such a loop into the one vector
 //! instruction the target has (`vroundps`, `vcvtdq2ps`, `vminps`, ...), and on a target without
 //! one it is still correct. The hand-built versions of these on pulp's integer operations,
-//! used before, made pulp8 1.3-2.0x slower than the hand-written avx2 on exp, log and the BDF;
-//! through arrays it is 1.0-1.4x.
+//! used before, made pulp 1.3-2.0x slower than the hand-written backend of its width on exp,
+//! log and the BDF; through arrays it is 0.95-1.45x (the `kernels` experiment on Zen 4).
 //! - gathers: lane by lane through an array after one vector bounds check (pulp has no
 //!   gather; LLVM does not make one of the loop either, so this is what portability costs);
 //! - `floor`/`round`: `f32::floor` / `f32::round_ties_even` through an array, lanes without a
@@ -527,7 +527,8 @@ impl<S: Simd> SimdMask for PM32<S> {
         match self.bits() {
             Some(bits) => bits,
             None => {
-                // each lane's sign, shifted to its place (a move-mask where LLVM sees it)
+                // each lane's sign shifted to its place: LLVM makes a shift/or reduction of
+                // about ten instructions, not one move-mask (the hand-written backends' cost: 1)
                 let m = self.lanes();
                 let mut bits = 0;
                 for (i, &x) in m.iter().enumerate().take(S::F32_LANES) {
