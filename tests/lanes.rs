@@ -401,3 +401,53 @@ backend_tests!(
     pulp8 => Backend::Pulp8,
     pulp16 => Backend::Pulp16,
 );
+
+/// One gather with lane `bad` (of the first `L::N`) set to `index`, the others in range.
+struct BadGather {
+    which: u32,
+    bad: usize,
+    index: i32,
+}
+
+impl Kernel for BadGather {
+    type Output = ();
+    fn run<L: Lanes>(self, l: L) {
+        let table = [1.0f32; 8];
+        let table_u = [1u32; 8];
+        let mut idx = [1i32; 16];
+        idx[self.bad % L::N] = self.index;
+        let idx = l.load_i32(&idx);
+        match self.which {
+            0 => std::hint::black_box(l.gather(&table, idx).lane(0)).to_bits(),
+            1 => std::hint::black_box(l.gather_u32(&table_u, idx).lane(0)) as u32,
+            _ => std::hint::black_box(l.gather2(&table, idx).0.lane(0)).to_bits(),
+        };
+    }
+}
+
+#[test]
+fn gathers_outside_the_table_panic_with_the_index() {
+    // Every backend checks its gather indices (bad input must not read out of bounds) and
+    // names the offending index; gather2 reads `i + 1` too, so `len - 1` is outside it.
+    for backend in Backend::usable() {
+        for which in 0..3 {
+            let len = if which == 2 { 7 } else { 8 };
+            for (bad, index) in [(0, -1), (3, len), (15, i32::MAX), (5, i32::MIN)] {
+                let result =
+                    std::panic::catch_unwind(|| backend.run(BadGather { which, bad, index }));
+                let err = result.expect_err(&format!(
+                    "{backend}: gather {which} of {index} did not panic"
+                ));
+                let msg = err
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| err.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .unwrap_or_default();
+                assert!(
+                    msg.contains(&format!("gather index {index} outside a table of")),
+                    "{backend}: gather {which}: {msg:?}"
+                );
+            }
+        }
+    }
+}
