@@ -49,11 +49,16 @@ pub fn lod_from_differentials<L: Lanes>(
     max_level: usize,
 ) -> L::F32s {
     let (w, h) = (width as f32, height as f32);
-    let len2 = |ds: L::F32s, dt: L::F32s| {
-        let (a, b) = (ds * w, dt * h);
-        a.mul_add(a, b * b)
-    };
-    let longest2 = len2(ds_dx, dt_dx).max(len2(ds_dy, dt_dy)).max(l.splat(1.0));
+    // Written out, not a closure called twice: LLVM may leave such a closure out of line,
+    // and outside the kernel's `#[target_feature]` function every intrinsic becomes a call
+    // (`scripts/check-inlining.sh` found this one once the renderer's batch driver changed
+    // the inlining around it).
+    let (ax, bx) = (ds_dx * w, dt_dx * h);
+    let (ay, by) = (ds_dy * w, dt_dy * h);
+    let longest2 = ax
+        .mul_add(ax, bx * bx)
+        .max(ay.mul_add(ay, by * by))
+        .max(l.splat(1.0));
     // log2(sqrt(x)) = log2(x) / 2
     (approx::log2(l, longest2) * 0.5).clamp(l.splat(0.0), l.splat(max_level as f32))
 }
