@@ -100,6 +100,10 @@ struct RenderArgs {
     /// surface lights: coherent shadow packets, noise correlated within a tile).
     #[arg(long, default_value = "pixel")]
     light_samples: coherent::render::LightSamples,
+    /// Regroup reflection and refraction rays: the active lanes of a tile's secondary packets
+    /// are compacted into full packets (the same image up to rounding; fewer, fuller packets).
+    #[arg(long)]
+    regroup: bool,
     /// Output image: .exr (HDR radiance) or .png (tone-mapped).
     #[arg(long, short)]
     out: std::path::PathBuf,

@@ -504,16 +504,71 @@ fn every_backend_and_accelerator_renders_the_scalar_bsp_image() {
 }
 
 #[test]
+fn regrouped_secondary_packets_give_each_sample_its_radiance() {
+    // Regrouping moves lanes between packets, so a lane meets other packet-mates in
+    // traversal and its contributions are summed in another order: the same image up to
+    // rounding (and to which of two triangles at a shared edge a lane hits: the dropped
+    // pixels), the same rays of every kind, and fuller secondary packets.
+    let mut fuller = 0;
+    for sc in &lit_scenes() {
+        if sc.depth == 0 {
+            continue;
+        }
+        for backend in Backend::usable() {
+            let accel = AnyAccel::build(&sc.accel_scene(), &AnyParams::of(AccelKind::Bsp)).unwrap();
+            let mut r = Renderer::new(sc, accel, W, H).unwrap();
+            let (plain, plain_stats) = render_centres(&r, backend, W, H).unwrap();
+            r.regroup = true;
+            let (img, stats) = render_centres(&r, backend, W, H).unwrap();
+            let what = format!("{}, {}", sc.name, backend.name());
+            assert_eq!(stats.nan, 0, "{what}");
+            for k in RayKind::ALL {
+                assert_eq!(
+                    stats.rays(k),
+                    plain_stats.rays(k),
+                    "{what}: {} rays",
+                    k.name()
+                );
+            }
+            for (d, (a, b)) in stats.depth.iter().zip(&plain_stats.depth).enumerate() {
+                assert_eq!(a.lanes, b.lanes, "{what}: rays at depth {d}");
+                assert!(a.packets <= b.packets, "{what}: more packets at depth {d}");
+                if d > 0 && a.packets < b.packets {
+                    fuller += 1;
+                }
+            }
+            // Camera packets are not regrouped.
+            assert_eq!(stats.depth[0], plain_stats.depth[0], "{what}");
+            let peak = plain
+                .iter()
+                .flat_map(|c| c.iter().copied())
+                .fold(0.0f32, f32::max)
+                .max(1e-3);
+            let (db, dropped) = psnr_but_edge_pixels(&img, &plain, peak);
+            assert!(
+                db >= 100.0,
+                "{what}: PSNR {db:.1} dB regrouped against not (without its {dropped} most \
+                 different pixel(s))"
+            );
+        }
+    }
+    if Backend::usable().iter().any(|b| b.lanes() > 1) {
+        assert!(fuller > 0, "regrouping never made fewer secondary packets");
+    }
+}
+
+#[test]
 fn the_thread_count_does_not_change_the_image() {
     use coherent::film::{FilmOptions, Method};
     use coherent::render::render_frame;
     let sc = &lit_scenes()[0];
     let accel = AnyAccel::build(&sc.accel_scene(), &AnyParams::of(AccelKind::Bsp)).unwrap();
-    let r = Renderer::new(sc, accel, W, H).unwrap();
+    let mut r = Renderer::new(sc, accel, W, H).unwrap();
     let backend = Backend::widest();
     let opts = FilmOptions::new(W, H, Method::Uniform { spp: 2 });
     let mut images = Vec::new();
-    for threads in [1, 3] {
+    for (threads, regroup) in [(1, false), (3, false), (1, true), (3, true)] {
+        r.regroup = regroup;
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
@@ -527,6 +582,10 @@ fn the_thread_count_does_not_change_the_image() {
     assert!(
         images[0] == images[1],
         "1 and 3 threads gave different images"
+    );
+    assert!(
+        images[2] == images[3],
+        "1 and 3 threads gave different images with regrouped secondary packets"
     );
 }
 

@@ -80,6 +80,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let memory = accel.memory_bytes();
     let mut renderer = Renderer::new(&scene, accel, w, h).context("the scene's camera")?;
     renderer.light_samples = args.light_samples;
+    renderer.regroup = args.regroup;
 
     let threads = args.threads.unwrap_or_else(|| {
         std::thread::available_parallelism()
@@ -139,7 +140,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .map(|k| format!("{} {:.2}", k.name(), st.kinds[*k as usize].average()))
         .collect();
     println!(
-        "{}: {}x{} {} ({} triangles), {} + {}, {} thread(s), {}: {:.3} s ({:.1} Mrays/s); rays: {}; \
+        "{}: {}x{} {} ({} triangles), {} + {}{}, {} thread(s), {}: {:.3} s ({:.1} Mrays/s); rays: {}; \
          active lanes per packet (of {}): {}; by depth: {}; material passes per packet {:.2}; \
          build {:.3} s, {:.1} MB; load {:.3} s -> {}",
         scene.name,
@@ -149,6 +150,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         scene.triangles(),
         backend.name(),
         kind,
+        if args.regroup { ", regrouped" } else { "" },
         threads,
         stop_text(&rendered),
         seconds.as_secs_f64(),

@@ -59,28 +59,41 @@ impl<T: SampleTracer> Kernel for TracePackets<'_, T> {
     #[inline(always)]
     fn run<L: Lanes>(self, l: L) -> Self::Output {
         let mut stats = T::Stats::default();
-        let mut out = Vec::with_capacity(self.packets.len());
-        let mut r = [0.0f32; MAX_LANES];
-        let mut g = [0.0f32; MAX_LANES];
-        let mut b = [0.0f32; MAX_LANES];
-        for p in self.packets {
-            let rgb = self.tracer.trace(
-                l,
-                l.load(&p.xs),
-                l.load(&p.ys),
-                l.load_i32(&p.ids),
-                l.mask_from_bits(p.bits),
-                &mut stats,
-            );
-            rgb.r.store(&mut r);
-            rgb.g.store(&mut g);
-            rgb.b.store(&mut b);
-            let mut lanes = [[0.0f32; 3]; MAX_LANES];
-            for (m, c) in lanes.iter_mut().enumerate().take(L::N) {
-                *c = [r[m], g[m], b[m]];
-            }
-            out.push(lanes);
-        }
+        let out = self.tracer.trace_batch(l, self.packets, &mut stats);
         (out, stats)
     }
+}
+
+/// [`SampleTracer::trace_batch`]'s default: each packet through [`SampleTracer::trace`], in
+/// order.
+#[inline(always)]
+pub fn trace_each<T: SampleTracer + ?Sized, L: Lanes>(
+    tracer: &T,
+    l: L,
+    packets: &[PacketIn],
+    stats: &mut T::Stats,
+) -> Vec<PacketOut> {
+    let mut out = Vec::with_capacity(packets.len());
+    let mut r = [0.0f32; MAX_LANES];
+    let mut g = [0.0f32; MAX_LANES];
+    let mut b = [0.0f32; MAX_LANES];
+    for p in packets {
+        let rgb = tracer.trace(
+            l,
+            l.load(&p.xs),
+            l.load(&p.ys),
+            l.load_i32(&p.ids),
+            l.mask_from_bits(p.bits),
+            stats,
+        );
+        rgb.r.store(&mut r);
+        rgb.g.store(&mut g);
+        rgb.b.store(&mut b);
+        let mut lanes = [[0.0f32; 3]; MAX_LANES];
+        for (m, c) in lanes.iter_mut().enumerate().take(L::N) {
+            *c = [r[m], g[m], b[m]];
+        }
+        out.push(lanes);
+    }
+    out
 }

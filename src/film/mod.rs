@@ -18,7 +18,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 pub use accuracy::display_difference;
-pub use batch::{PacketIn, PacketOut, trace_packets};
+pub use batch::{PacketIn, PacketOut, trace_each, trace_packets};
 pub use matrix::{Film, ScreenMatrix, matrix_of};
 pub use render::render;
 pub use superpixel::Superpixels;

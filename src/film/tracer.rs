@@ -3,6 +3,8 @@
 
 use coherent_simd::{Lanes, Rgbs};
 
+use super::batch::{PacketIn, PacketOut, trace_each};
+
 /// A renderer as the film drives it.
 pub trait SampleTracer: Sync {
     /// Per-task statistics (rays by kind, active lanes per stage, NaN count...), merged in a
@@ -23,4 +25,18 @@ pub trait SampleTracer: Sync {
         active: L::Mask,
         stats: &mut Self::Stats,
     ) -> Rgbs<L>;
+
+    /// The radiance of each lane of `packets` (a tile's samples, each packet of `l`'s width),
+    /// in order. By default each packet through [`SampleTracer::trace`]; a tracer may trace
+    /// the batch together (the renderer's regrouping of secondary packets), as long as each
+    /// lane's radiance is what `trace` would give it up to rounding.
+    #[inline(always)]
+    fn trace_batch<L: Lanes>(
+        &self,
+        l: L,
+        packets: &[PacketIn],
+        stats: &mut Self::Stats,
+    ) -> Vec<PacketOut> {
+        trace_each(self, l, packets, stats)
+    }
 }

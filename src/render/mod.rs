@@ -7,9 +7,11 @@
 //! carrying its throughput. A stage never falls back to scalar code for one lane: finished
 //! lanes are masked, not branched around.
 //!
-//! Secondary packets keep the lanes of their parent packet (no regrouping across packets);
-//! see README.md for why.
+//! Secondary packets keep the lanes of their parent packet unless the renderer's `regroup`
+//! switch is on: then the reflection and refraction lanes of a whole batch of packets are
+//! compacted into full packets (`batch.rs`).
 
+mod batch;
 pub mod centres;
 pub mod light_samples;
 pub mod rng;
@@ -17,7 +19,7 @@ pub mod stats;
 pub mod surface;
 
 use coherent_accel::{Accel, Rays};
-use coherent_simd::{Lanes, Rgbs, SimdF32, SimdI32, SimdMask, Vec3s};
+use coherent_simd::{Lanes, MAX_LANES, Rgbs, SimdF32, SimdI32, SimdMask, Vec3s};
 
 use crate::bdf::Frames;
 use crate::camera::{CameraError, PinholeCamera};
@@ -49,6 +51,10 @@ pub struct Renderer<'s, A: Accel> {
     pub time_stages: bool,
     /// Which random numbers pick the light samples (per image sample by default).
     pub light_samples: LightSamples,
+    /// Compact the active lanes of reflection and refraction packets across the packets of a
+    /// batch (a tile of the film) into full packets (`batch.rs`); off by default: the
+    /// paper's packets keep their lanes.
+    pub regroup: bool,
     /// The image's width in pixels (for [`LightSamples::Tile`]).
     width: u32,
 }
@@ -65,6 +71,11 @@ struct Segment<L: Lanes> {
     /// Which node of the ray tree this is (root 1, children 2k and 2k+1): random-number
     /// streams hang off it.
     path: u32,
+    /// The random-number ids of the light samples, per lane ([`LightSamples::ids`]).
+    light_ids: L::I32s,
+    /// Where each lane's radiance goes: its sample's index in the batch (packet * lanes +
+    /// lane; regrouped packets mix the lanes of several camera packets).
+    slot: L::I32s,
 }
 
 impl<'s, A: Accel> Renderer<'s, A> {
@@ -94,6 +105,7 @@ impl<'s, A: Accel> Renderer<'s, A> {
             depth: scene.depth,
             time_stages: false,
             light_samples: LightSamples::Pixel,
+            regroup: false,
             width,
         })
     }
@@ -121,11 +133,40 @@ impl<'s, A: Accel> Renderer<'s, A> {
         active: L::Mask,
         stats: &mut RenderStats,
     ) -> Rgbs<L> {
-        stats.width = L::N as u32;
-        let mut clock = StageClock::start(self.time_stages);
+        // Through the batch driver, as one packet (the film traces whole batches).
+        let mut p = crate::film::PacketIn::default();
+        xs.store(&mut p.xs);
+        ys.store(&mut p.ys);
+        ids.store(&mut p.ids);
+        p.bits = active.bitmask();
+        let out = self.trace_batch_lanes(l, std::slice::from_ref(&p), stats);
+        let c = &out[0];
+        let mut rgb = [[0.0f32; MAX_LANES]; 3];
+        for m in 0..L::N {
+            for (ch, v) in rgb.iter_mut().zip(c[m]) {
+                ch[m] = v;
+            }
+        }
+        Rgbs {
+            r: l.load(&rgb[0]),
+            g: l.load(&rgb[1]),
+            b: l.load(&rgb[2]),
+        }
+    }
+
+    /// The camera rays through the image points `(xs, ys)` as the root of a ray tree.
+    #[inline(always)]
+    fn camera_segment<L: Lanes>(
+        &self,
+        l: L,
+        xs: L::F32s,
+        ys: L::F32s,
+        ids: L::I32s,
+        active: L::Mask,
+    ) -> Segment<L> {
         let cam = self.camera.rays(l, xs, ys);
         let zero3 = Vec3s::splat(l, glam::Vec3::ZERO);
-        let mut seg = Segment {
+        Segment {
             rays: cam.rays,
             diff: Differentials {
                 dorigin_dx: zero3,
@@ -138,36 +179,19 @@ impl<'s, A: Accel> Renderer<'s, A> {
             depth: 0,
             kind: RayKind::Primary,
             path: 1,
-        };
-        let mut radiance = Rgbs::zero(l);
-        let light_ids = self.light_samples.ids(l, xs, ys, ids, self.width);
-        // Depth-first over the ray tree; allocates only when a packet spawns children.
-        let mut pending: Vec<Segment<L>> = Vec::new();
-        clock.lap(stats, Stage::Other);
-        loop {
-            self.segment(l, &seg, light_ids, &mut radiance, &mut pending, stats);
-            match pending.pop() {
-                Some(s) => seg = s,
-                None => break,
-            }
+            light_ids: self.light_samples.ids(l, xs, ys, ids, self.width),
+            slot: l.lane_ids(),
         }
-        let nan = (radiance.r.is_nan() | radiance.g.is_nan() | radiance.b.is_nan()) & active;
-        if nan.any() {
-            stats.nan += u64::from(nan.count());
-            radiance = Rgbs::select(nan, Rgbs::zero(l), radiance);
-        }
-        Rgbs::select(active, radiance, Rgbs::zero(l))
     }
 
     /// Traces one packet: its hits are shaded and lit into `radiance`, its reflection and
     /// refraction packets go to `pending`. The light samples' random numbers derive from
-    /// `ids`.
+    /// `seg.light_ids`.
     #[inline(always)]
     fn segment<L: Lanes>(
         &self,
         l: L,
         seg: &Segment<L>,
-        ids: L::I32s,
         radiance: &mut Rgbs<L>,
         pending: &mut Vec<Segment<L>>,
         stats: &mut RenderStats,
@@ -242,8 +266,8 @@ impl<'s, A: Accel> Renderer<'s, A> {
                     let stream =
                         rng::hash1(seg.path.wrapping_mul(0x9e37_79b1) ^ ((li as u32) << 20) ^ k);
                     let u = [
-                        rng::uniform(l, ids, stream),
-                        rng::uniform(l, ids, stream ^ 0x5555_5555),
+                        rng::uniform(l, seg.light_ids, stream),
+                        rng::uniform(l, seg.light_ids, stream ^ 0x5555_5555),
                     ];
                     let ls = light.sample(l, &surf.p, &ns, can_light, k, u);
                     let on = ls.active & can_light;
@@ -301,6 +325,8 @@ impl<'s, A: Accel> Renderer<'s, A> {
                 depth: seg.depth + 1,
                 kind: RayKind::Reflection,
                 path: seg.path.wrapping_mul(2),
+                light_ids: seg.light_ids,
+                slot: seg.slot,
             });
         }
 
@@ -331,6 +357,8 @@ impl<'s, A: Accel> Renderer<'s, A> {
                     depth: seg.depth + 1,
                     kind: RayKind::Refraction,
                     path: seg.path.wrapping_mul(2) | 1,
+                    light_ids: seg.light_ids,
+                    slot: seg.slot,
                 });
             }
         }
@@ -444,5 +472,15 @@ impl<A: Accel> crate::film::SampleTracer for Renderer<'_, A> {
         stats: &mut RenderStats,
     ) -> Rgbs<L> {
         self.trace_packet(l, xs, ys, ids, active, stats)
+    }
+
+    #[inline(always)]
+    fn trace_batch<L: Lanes>(
+        &self,
+        l: L,
+        packets: &[crate::film::PacketIn],
+        stats: &mut RenderStats,
+    ) -> Vec<crate::film::PacketOut> {
+        self.trace_batch_lanes(l, packets, stats)
     }
 }
