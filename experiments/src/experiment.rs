@@ -322,7 +322,8 @@ mod tests {
         assert_eq!(
             names,
             [
-                "kernels", "accel", "table1", "table2", "table3", "table4", "table5", "aa"
+                "kernels", "accel", "table1", "table2", "table3", "table4", "table5", "aa",
+                "regroup"
             ]
         );
     }

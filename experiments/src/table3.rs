@@ -820,7 +820,8 @@ fn coherence_md(ctx: &Ctx, c: &Table) -> anyhow::Result<String> {
          packet (camera rays at depth 0, then reflection and refraction packets; shadow packets \
          are not counted here), per packet width. Secondary packets keep their parent's lanes, \
          so a lane that missed, or whose surface neither reflects nor refracts, stays empty \
-         below it:\n\n",
+         below it (the `regroup` experiment compacts them across packets and measures \
+         whether that pays):\n\n",
     );
     let depths = c.distinct("depth")?;
     let mut header = vec!["scene".to_owned(), "lanes".to_owned()];
