@@ -8,8 +8,10 @@
 //! Protocol: the scenes and frames of `table3` (same plan) that trace reflection or
 //! refraction rays, the BSP, the hand-written backends of 4, 8 and 16 lanes usable here.
 //! Per scene and backend, one untimed frame each way (the images, compared by PSNR after
-//! tone mapping, and the packet counts), then 3 rounds alternate the two; `seconds` is the
-//! median, `speedup` = seconds without regrouping / this row's.
+//! tone mapping, and the packet counts), then [`ROUNDS`] rounds alternate the two (which goes
+//! first alternates too); `seconds` is the median, `speedup` = seconds without regrouping /
+//! this row's, `spread` = the slowest round / the fastest: this machine's run-to-run noise,
+//! measured on the very frames compared.
 
 use std::collections::BTreeMap;
 use std::fmt::Display;
@@ -46,7 +48,11 @@ const HEADER: &[&str] = &[
     "secondary_packets",
     "secondary_lanes",
     "psnr_db",
+    "spread",
 ];
+
+/// Timed rounds per scene and backend, each way.
+const ROUNDS: usize = 5;
 
 /// The backends compared: the hand-written ones of each width.
 const BACKENDS: [Backend; 3] = [Backend::Sse, Backend::Avx2, Backend::Avx512];
@@ -60,12 +66,15 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
             Some(why) => ctx.note(format!("regroup: backend {b} skipped: {why}")),
         }
     }
+    if backends.is_empty() {
+        ctx.note("regroup: no packet backend usable here; nothing to compare");
+        return Ok(());
+    }
     run_plan(ctx, &plan, &backends)
 }
 
 /// Runs the experiment over `plan` with these backends.
 pub fn run_plan(ctx: &mut Ctx, plan: &Plan, backends: &[Backend]) -> anyhow::Result<()> {
-    let rounds = 3;
     let pool = frames::pool(1)?;
     let mut csv = ctx.csv(FILE, HEADER)?;
     let specs = frames::scene_specs(plan);
@@ -84,6 +93,10 @@ pub fn run_plan(ctx: &mut Ctx, plan: &Plan, backends: &[Backend]) -> anyhow::Res
                 continue;
             }
         };
+        if scene.depth == 0 {
+            bar.inc(1);
+            continue; // camera rays only: nothing to regroup
+        }
         let mut r = frames::renderer(&scene, AccelKind::Bsp)?;
         for &b in backends {
             // Untimed: images and packet counts.
@@ -96,11 +109,17 @@ pub fn run_plan(ctx: &mut Ctx, plan: &Plan, backends: &[Backend]) -> anyhow::Res
                 stats.push(rendered.stats);
             }
             if stats[0].depth.len() < 2 {
-                break; // camera rays only: nothing to regroup
+                // No surface reflects or refracts: no secondary packets, with any backend.
+                break;
             }
             let mut seconds: BTreeMap<bool, Vec<f64>> = BTreeMap::new();
-            for _ in 0..rounds {
-                for regroup in [false, true] {
+            for round in 0..ROUNDS {
+                let order = if round % 2 == 0 {
+                    [false, true]
+                } else {
+                    [true, false]
+                };
+                for regroup in order {
                     r.regroup = regroup;
                     let (_, s) = frames::frame(&pool, b, &r, plan)?;
                     seconds.entry(regroup).or_default().push(s);
@@ -109,13 +128,14 @@ pub fn run_plan(ctx: &mut Ctx, plan: &Plan, backends: &[Backend]) -> anyhow::Res
             let off = median(&seconds[&false]);
             for (i, regroup) in [false, true].into_iter().enumerate() {
                 let s = median(&seconds[&regroup]);
+                let spread = spread(&seconds[&regroup]);
                 let (packets, lanes) = secondary(&stats[i]);
                 let db = if regroup {
                     psnr(&images[1], &images[0], 1.0)
                 } else {
                     f64::INFINITY
                 };
-                let cells: [&dyn Display; 9] = [
+                let cells: [&dyn Display; 10] = [
                     name,
                     &b.name(),
                     &b.lanes(),
@@ -125,6 +145,7 @@ pub fn run_plan(ctx: &mut Ctx, plan: &Plan, backends: &[Backend]) -> anyhow::Res
                     &packets,
                     &format!("{:.3}", lanes as f64 / packets.max(1) as f64),
                     &format!("{db:.2}"),
+                    &format!("{spread:.3}"),
                 ];
                 csv.row(&cells)?;
             }
@@ -137,10 +158,10 @@ pub fn run_plan(ctx: &mut Ctx, plan: &Plan, backends: &[Backend]) -> anyhow::Res
     Ok(())
 }
 
-/// What the rows say, from `(speedup, share of secondary packets saved)` per row: the range
-/// and geometric mean of the speedups, and the noise band: the spread of the rows where
-/// regrouping saved under [`NOISE_SAVED`] of the packets (the two ways then trace nearly the
-/// same packets, so their difference is run-to-run noise).
+/// What the rows say, from `(speedup, noise)` per row (`noise`: the larger `spread` of the
+/// row's two ways, slowest round over fastest): the range and geometric mean of the
+/// speedups, and which rows moved by more than their own rounds spread (a row whose speedup
+/// `g` has `1/noise <= g <= noise` cannot tell regrouping from run-to-run noise).
 fn verdict(rows: &[(f64, f64)]) -> String {
     if rows.is_empty() {
         return String::new();
@@ -151,48 +172,44 @@ fn verdict(rows: &[(f64, f64)]) -> String {
             (a.min(g), b.max(g))
         });
     let gm = (rows.iter().map(|&(g, _)| g.ln()).sum::<f64>() / rows.len() as f64).exp();
-    let mut md = format!(
-        "\nRegrouped over not: {lo:.2}x to {hi:.2}x, geometric mean {gm:.3}x over {} rows.",
-        rows.len()
-    );
-    let quiet: Vec<f64> = rows
+    let noise: Vec<f64> = rows.iter().map(|&(_, n)| n).collect();
+    let (nlo, nhi) = noise
         .iter()
-        .filter(|&&(_, saved)| saved < NOISE_SAVED)
-        .map(|&(g, _)| g)
+        .fold((f64::INFINITY, 0.0f64), |(a, b), &n| (a.min(n), b.max(n)));
+    let outside: Vec<String> = rows
+        .iter()
+        .filter(|&&(g, n)| g > n || g < 1.0 / n)
+        .map(|&(g, _)| format!("{g:.2}x"))
         .collect();
-    if quiet.len() >= 2 {
-        let (nlo, nhi) = quiet
-            .iter()
-            .fold((f64::INFINITY, 0.0f64), |(a, b), &g| (a.min(g), b.max(g)));
-        let outside: Vec<f64> = rows
-            .iter()
-            .filter(|&&(g, saved)| saved >= NOISE_SAVED && (g < nlo || g > nhi))
-            .map(|&(g, _)| g)
-            .collect();
-        md.push_str(&format!(
-            " The {} rows where it saved under {:.0}% of the secondary packets (the two ways \
-             trace nearly the same packets) span {nlo:.2}x to {nhi:.2}x: that is this run's \
-             noise; {} of the other {} rows fall outside that band{}.",
-            quiet.len(),
-            NOISE_SAVED * 100.0,
-            outside.len(),
-            rows.len() - quiet.len(),
-            if outside.is_empty() {
-                String::new()
-            } else {
-                let v: Vec<String> = outside.iter().map(|g| format!("{g:.2}x")).collect();
-                format!(" ({})", v.join(", "))
-            }
-        ));
-    }
+    let mut md = format!(
+        "\nRegrouped over not: {lo:.2}x to {hi:.2}x, geometric mean {gm:.3}x over {} \
+         row(s). The repeated rounds of one frame spread by {:.0}% to {:.0}% (slowest round \
+         over fastest, median {:.0}%): that is this run's noise, measured on the frames \
+         compared. {} row(s) moved by more than their own rounds spread{}.",
+        rows.len(),
+        (nlo - 1.0) * 100.0,
+        (nhi - 1.0) * 100.0,
+        (median(&noise) - 1.0) * 100.0,
+        outside.len(),
+        if outside.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", outside.join(", "))
+        }
+    );
     md.push_str(
         " The renderer keeps it off by default (`coherent render --regroup` turns it on).\n",
     );
     md
 }
 
-/// Rows saving less than this share of the secondary packets measure noise (see [`verdict`]).
-const NOISE_SAVED: f64 = 0.05;
+/// The spread of repeated timings: the slowest over the fastest.
+fn spread(v: &[f64]) -> f64 {
+    let (lo, hi) = v
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+    hi / lo
+}
 
 /// Packets and active lanes of the reflection and refraction packets (depth 1 and deeper).
 fn secondary(s: &RenderStats) -> (u64, u64) {
@@ -240,16 +257,18 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     let Some(t) = ctx.read_csv(FILE, HEADER)? else {
         return Ok(None);
     };
-    let mut md = String::from(
+    let mut md = format!(
         "The frames of `table3` that trace reflection or refraction rays (same scenes, size \
          and samples; BSP; one thread), each hand-written backend with the renderer's \
          secondary packets as they come (`off`: a packet keeps its parent's lanes, as in the \
          paper) and regrouped (`on`: per node of the ray tree, the partial packets of a film \
          tile compacted into full packets; full ones pass as they are). One untimed frame each way gives the \
          packet counts and the images (PSNR of the regrouped image against the other after \
-         tone mapping: they differ by rounding and by edge hits), then 3 rounds alternate \
-         them; `seconds` is the median. `secondary lanes` is the average active lanes per \
-         reflection or refraction packet.\n\n",
+         tone mapping: they differ by rounding and by edge hits), then {ROUNDS} rounds alternate \
+         them (which goes first alternates too); `seconds` is the median, `rounds spread` \
+         the slowest round over the fastest of either way (the noise of that row). \
+         `secondary lanes` is the average active lanes per reflection or refraction \
+         packet.\n\n",
     );
     let mut rows = Vec::new();
     let mut gains = Vec::new();
@@ -272,9 +291,8 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
             };
             let lanes = t.get(on, "lanes")?.to_owned();
             let gain = t.f64(on, "speedup")?;
-            let saved =
-                1.0 - t.f64(on, "secondary_packets")? / t.f64(off, "secondary_packets")?.max(1.0);
-            gains.push((gain, saved));
+            let noise = t.f64(off, "spread")?.max(t.f64(on, "spread")?);
+            gains.push((gain, noise));
             rows.push(vec![
                 s.clone(),
                 format!("{b} ({lanes})"),
@@ -294,6 +312,7 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
                     fmt_num(t.f64(on, "seconds")?)
                 ),
                 format!("{gain:.3}"),
+                format!("{:.3}", noise),
                 fmt_num(t.f64(on, "psnr_db")?),
             ]);
         }
@@ -306,6 +325,7 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
             "secondary packets off / on",
             "seconds off / on",
             "speedup",
+            "rounds spread",
             "PSNR dB",
         ],
         &rows,
@@ -353,6 +373,9 @@ mod tests {
         );
         assert!(on >= off && on <= b.lanes() as f64, "{off} -> {on}");
         assert!(t.f64(1, "psnr_db").unwrap() >= 60.0);
+        for row in 0..2 {
+            assert!(t.f64(row, "spread").unwrap() >= 1.0);
+        }
         let md = report(&ctx).unwrap().unwrap();
         let row = format!("| spdemo | {} ({}) |", b.name(), b.lanes());
         assert!(md.contains(&row), "{md}");

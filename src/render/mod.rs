@@ -52,8 +52,9 @@ pub struct Renderer<'s, A: Accel> {
     /// Which random numbers pick the light samples (per image sample by default).
     pub light_samples: LightSamples,
     /// Compact the active lanes of reflection and refraction packets across the packets of a
-    /// batch (a tile of the film) into full packets (`batch.rs`); off by default: the
-    /// paper's packets keep their lanes.
+    /// batch into full packets (`batch.rs`): a film tile's packets when rendering a frame, a
+    /// fixed chunk of the superpixel corners, the whole image in `centres::render_centres`.
+    /// Off by default: the paper's packets keep their lanes.
     pub regroup: bool,
     /// The image's width in pixels (for [`LightSamples::Tile`]).
     width: u32,
