@@ -23,9 +23,10 @@ impl Accel for Embree {
         "embree"
     }
 
-    /// Bytes the Embree device holds (geometry buffers and BVHs, by its memory monitor).
+    /// Bytes this scene holds on the Embree device (geometry buffers and BVHs, by the
+    /// device's memory monitor: what the device gained while building it).
     fn memory_bytes(&self) -> usize {
-        self.device.memory_bytes()
+        self.stats.memory_bytes
     }
 
     fn stats(&self) -> BuildStats {

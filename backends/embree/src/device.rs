@@ -4,6 +4,7 @@
 use core::ffi::{CStr, c_void};
 use std::ffi::CString;
 use std::sync::atomic::{AtomicIsize, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
 
 use crate::EmbreeError;
 use crate::ffi::{self, Api, RTCDevice};
@@ -16,6 +17,10 @@ pub struct Device {
     /// Bytes the device holds, counted by its memory monitor callback. Boxed so the address
     /// handed to the library stays put when the device moves.
     memory: Box<AtomicIsize>,
+    /// Held around everything that allocates or frees on the device (building, changing and
+    /// releasing scenes), so that a scene's share of [`Self::memory_bytes`] is the change
+    /// during its own build even when other threads build or drop scenes.
+    alloc: Mutex<()>,
 }
 
 // SAFETY: an Embree device may be used from any thread (the library's documented contract);
@@ -51,7 +56,12 @@ impl Device {
             });
         }
         let memory = Box::new(AtomicIsize::new(0));
-        let device = Self { api, raw, memory };
+        let device = Self {
+            api,
+            raw,
+            memory,
+            alloc: Mutex::new(()),
+        };
         // SAFETY: the counter outlives the device (dropped after `rtcReleaseDevice`).
         unsafe {
             (api.set_device_memory_monitor_function)(
@@ -63,6 +73,33 @@ impl Device {
         check_abi(device.version())?;
         device.check("set up the device")?;
         Ok(device)
+    }
+
+    /// The process's device for `threads` build threads: created on first use and kept until
+    /// the process ends, shared by every scene built with that setting.
+    ///
+    /// One device per scene made Embree's TBB tasking leave a worker thread spinning at 100%
+    /// of a core (`sched_yield` in a loop) for as long as any device was alive, once two
+    /// devices had been alive at the same time (measured: process CPU time over a 1 s sleep
+    /// with one scene alive, 0% before any overlap, 100% after; `reproduce --only accel`
+    /// rebuilt each scene while the previous build was still alive). That spinning thread
+    /// took the second core during every single-thread timing of every accelerator, and the
+    /// main thread lost a quarter of its samples while profiled. Embree's documentation has
+    /// one device per application.
+    pub fn shared(threads: Option<usize>) -> Result<Arc<Device>, EmbreeError> {
+        static DEVICES: Mutex<Vec<(Option<usize>, Arc<Device>)>> = Mutex::new(Vec::new());
+        let mut devices = DEVICES.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, d)) = devices.iter().find(|(t, _)| *t == threads) {
+            return Ok(Arc::clone(d));
+        }
+        let d = Arc::new(Device::new(threads)?);
+        devices.push((threads, Arc::clone(&d)));
+        Ok(d)
+    }
+
+    /// The lock to hold while allocating or freeing on the device (see [`Self::alloc`]).
+    pub(crate) fn alloc_lock(&self) -> MutexGuard<'_, ()> {
+        self.alloc.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     /// `rtcGetDeviceProperty(VERSION)`, e.g. 40400 for 4.4.0.

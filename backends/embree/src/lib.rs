@@ -26,12 +26,12 @@ pub use scene::{BuildQuality, Embree, EmbreeParams};
 
 /// Whether Embree can be used here, or why not (cause and fix).
 pub fn unavailable_reason() -> Option<String> {
-    Device::new(Some(1)).err().map(|e| e.to_string())
+    Device::shared(Some(1)).err().map(|e| e.to_string())
 }
 
 /// `rtcGetDeviceProperty(VERSION)` of the loaded library, e.g. 40400 for 4.4.0.
 pub fn version() -> Result<u32, EmbreeError> {
-    Device::new(Some(1)).map(|d| d.version())
+    Device::shared(Some(1)).map(|d| d.version())
 }
 
 /// What the loaded Embree runs on this machine (for `machine.json` and reports).
@@ -47,7 +47,7 @@ pub struct EmbreeInfo {
 
 /// [`EmbreeInfo`] of the loaded library, or why there is none.
 pub fn info() -> Result<EmbreeInfo, EmbreeError> {
-    let d = Device::new(Some(1))?;
+    let d = Device::shared(Some(1))?;
     Ok(EmbreeInfo {
         version: version_string(d.version()),
         isa: d.isa(),

@@ -114,8 +114,9 @@ pub struct Embree {
     all_hits_twin: std::sync::OnceLock<Option<Box<Embree>>>,
     pub(crate) params: EmbreeParams,
     pub(crate) stats: BuildStats,
-    /// Dropped last: the scenes above are released first (see `Drop`).
-    pub(crate) device: Device,
+    /// The process's device for these build threads ([`Device::shared`]); the scenes above
+    /// are released before this handle (see `Drop`).
+    pub(crate) device: std::sync::Arc<Device>,
 }
 
 // SAFETY: a committed Embree scene may be queried from any number of threads at once (the
@@ -141,7 +142,9 @@ impl Embree {
     /// handed to Embree as a single point, so they are never hit, and counted.
     pub fn build_scene(scene: &Scene, params: &EmbreeParams) -> Result<Self, EmbreeError> {
         scene.validate()?;
-        let device = Device::new(params.threads)?;
+        let device = Device::shared(params.threads)?;
+        let lock = device.alloc_lock();
+        let before = device.memory_bytes();
         let start = Instant::now();
         let mut e = Self {
             meshes: Vec::with_capacity(scene.meshes.len()),
@@ -153,22 +156,32 @@ impl Embree {
             all_hits_twin: std::sync::OnceLock::new(),
             params: *params,
             stats: BuildStats::default(),
-            device,
+            device: std::sync::Arc::clone(&device),
         };
-        for mesh in &scene.meshes {
-            let raw = e.new_scene(params.mesh_quality)?;
-            e.meshes.push(raw);
-            let (kept, degenerate) = e.attach_triangles(raw, mesh)?;
-            e.stats.triangles += kept;
-            e.stats.degenerate += degenerate;
-            // SAFETY: a live scene with committed geometry.
-            unsafe { (e.device.api.commit_scene)(raw) };
-            e.device.check("build a mesh's BVH")?;
-        }
-        e.build_top(&scene.instances)?;
+        let built = e.fill(scene);
         e.stats.build_seconds = start.elapsed().as_secs_f64();
-        e.stats.memory_bytes = e.device.memory_bytes();
+        // This scene's bytes: what the device gained during the build (no other thread
+        // allocates or frees on it meanwhile).
+        e.stats.memory_bytes = e.device.memory_bytes().saturating_sub(before);
+        // Released before `e` can be dropped: its `Drop` takes the lock too.
+        drop(lock);
+        built?;
         Ok(e)
+    }
+
+    /// Builds the meshes' scenes and the top scene of a new `Embree`.
+    fn fill(&mut self, scene: &Scene) -> Result<(), EmbreeError> {
+        for mesh in &scene.meshes {
+            let raw = self.new_scene(self.params.mesh_quality)?;
+            self.meshes.push(raw);
+            let (kept, degenerate) = self.attach_triangles(raw, mesh)?;
+            self.stats.triangles += kept;
+            self.stats.degenerate += degenerate;
+            // SAFETY: a live scene with committed geometry.
+            unsafe { (self.device.api.commit_scene)(raw) };
+            self.device.check("build a mesh's BVH")?;
+        }
+        self.build_top(&scene.instances)
     }
 
     /// The scene on which all-hits queries run: this one when built with
@@ -347,8 +360,12 @@ impl Embree {
 
     /// Replaces the instances and rebuilds the top level only (the meshes' BVHs are kept).
     pub fn replace_instances(&mut self, instances: &[Instance]) -> Result<(), EmbreeError> {
+        let device = std::sync::Arc::clone(&self.device);
+        let _lock = device.alloc_lock();
+        let before = device.memory_bytes() as isize;
         self.build_top(instances)?;
-        self.stats.memory_bytes = self.device.memory_bytes();
+        let grown = device.memory_bytes() as isize - before;
+        self.stats.memory_bytes = (self.stats.memory_bytes as isize + grown).max(0) as usize;
         Ok(())
     }
 
@@ -372,6 +389,7 @@ impl Embree {
 impl Drop for Embree {
     fn drop(&mut self) {
         let api = self.device.api;
+        let _lock = self.device.alloc_lock();
         // SAFETY: every handle is live and released once, before the device.
         unsafe {
             if !self.top.is_null() && !self.direct {
