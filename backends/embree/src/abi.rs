@@ -486,10 +486,17 @@ fn all_hits_without_the_filter_flag_use_a_copy_with_it() {
         all_hits: false,
         ..EmbreeParams::default()
     };
-    let e = Embree::build(&scene, &p).unwrap();
+    let mut e = Embree::build(&scene, &p).unwrap();
     let mut insts = Vec::new();
     e.intersect_all1(&up(0.75, 0.25), &mut |h| insts.push(h.inst));
     insts.sort();
     assert_eq!(insts, [0, 1]);
     assert_eq!(e.intersect1(&up(0.75, 0.25)).map(|h| h.inst), Some(0));
+    // New instances drop the copy (its release must not wait on the rebuild's lock) and the
+    // next all-hits query builds one of the new instances.
+    e.set_instances(&scene.instances[1..]).unwrap();
+    let mut insts = Vec::new();
+    e.intersect_all1(&up(0.75, 0.25), &mut |h| insts.push(h.inst));
+    assert_eq!(insts, [0]);
+    assert!(e.memory_bytes() > 0);
 }

@@ -304,7 +304,6 @@ impl Embree {
         if let Some(s) = &mut self.source {
             s.instances = instances.to_vec();
         }
-        self.all_hits_twin = std::sync::OnceLock::new();
         if let [one] = instances
             && one.world_from_object == Affine3A::IDENTITY
         {
@@ -360,6 +359,10 @@ impl Embree {
 
     /// Replaces the instances and rebuilds the top level only (the meshes' BVHs are kept).
     pub fn replace_instances(&mut self, instances: &[Instance]) -> Result<(), EmbreeError> {
+        coherent_accel::scene::validate_instances(instances, self.meshes.len())?;
+        // The all-hits copy holds the old instances: dropped (rebuilt on the next all-hits
+        // query), and before the lock, which its `Drop` takes.
+        drop(std::mem::take(&mut self.all_hits_twin));
         let device = std::sync::Arc::clone(&self.device);
         let _lock = device.alloc_lock();
         let before = device.memory_bytes() as isize;
