@@ -84,8 +84,9 @@ impl Device {
     /// with one scene alive, 0% before any overlap, 100% after; `reproduce --only accel`
     /// rebuilt each scene while the previous build was still alive). That spinning thread
     /// took the second core during every single-thread timing of every accelerator, and the
-    /// main thread lost a quarter of its samples while profiled. Embree's documentation has
-    /// one device per application.
+    /// main thread lost a quarter of its samples while profiled. Embree's tasking (the
+    /// `threads` setting) is global to the process anyway, so one device per setting loses
+    /// nothing.
     pub fn shared(threads: Option<usize>) -> Result<Arc<Device>, EmbreeError> {
         static DEVICES: Mutex<Vec<(Option<usize>, Arc<Device>)>> = Mutex::new(Vec::new());
         let mut devices = DEVICES.lock().unwrap_or_else(|e| e.into_inner());
