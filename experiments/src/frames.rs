@@ -89,6 +89,26 @@ pub fn load(plan: &Plan, spec: &str) -> Loaded {
     }
 }
 
+/// [`load`] for an experiment that leaves out what it cannot render: the scene, or `None`
+/// when the plan leaves it out as too large (quietly: not an error) or it failed to load
+/// (noted as `experiment: scene NAME skipped: why`).
+pub fn load_or_note(
+    ctx: &mut crate::ctx::Ctx,
+    experiment: &str,
+    plan: &Plan,
+    name: &str,
+    spec: &str,
+) -> Option<Box<RenderScene>> {
+    match load(plan, spec) {
+        Loaded::Scene(s) => Some(s),
+        Loaded::TooLarge { .. } => None,
+        Loaded::Failed(why) => {
+            ctx.note(format!("{experiment}: scene {name} skipped: {why}"));
+            None
+        }
+    }
+}
+
 /// The accelerators usable here, and a `(name, why)` for each that is not.
 pub fn accels() -> (Vec<AccelKind>, Vec<(String, String)>) {
     let mut ok = Vec::new();

@@ -23,7 +23,7 @@ use coherent::simd::Backend;
 
 use crate::ctx::Ctx;
 use crate::experiment::{Experiment, Status};
-use crate::frames::{self, Loaded, Plan};
+use crate::frames::{self, Plan};
 use crate::plot::BarChart;
 use crate::table::{fmt_num, markdown_table};
 use crate::timing::{median, speedup};
@@ -81,17 +81,9 @@ pub fn run_plan(ctx: &mut Ctx, plan: &Plan, backends: &[Backend]) -> anyhow::Res
     let bar = ctx.progress(specs.len() as u64, "regroup");
     for (name, spec) in &specs {
         bar.set_message(name.clone());
-        let scene = match frames::load(plan, spec) {
-            Loaded::Scene(s) => s,
-            Loaded::TooLarge { .. } => {
-                bar.inc(1);
-                continue;
-            }
-            Loaded::Failed(why) => {
-                ctx.note(format!("regroup: scene {name} skipped: {why}"));
-                bar.inc(1);
-                continue;
-            }
+        let Some(scene) = frames::load_or_note(ctx, "regroup", plan, name, spec) else {
+            bar.inc(1);
+            continue;
         };
         if scene.depth == 0 {
             bar.inc(1);

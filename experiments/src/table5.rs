@@ -15,7 +15,7 @@ use coherent::simd::Backend;
 
 use crate::ctx::Ctx;
 use crate::experiment::{Experiment, Status};
-use crate::frames::{self, Loaded, Plan};
+use crate::frames::{self, Plan};
 use crate::plot::{LineChart, Series};
 use crate::table::{PaperTable, fmt_num, markdown_table};
 use crate::timing::{median, speedup};
@@ -96,17 +96,9 @@ pub fn run_plan(
     let bar = ctx.progress(specs.len() as u64, "table5");
     for (name, spec) in &specs {
         bar.set_message(name.clone());
-        let scene = match frames::load(plan, spec) {
-            Loaded::Scene(s) => s,
-            Loaded::TooLarge { .. } => {
-                bar.inc(1);
-                continue;
-            }
-            Loaded::Failed(why) => {
-                ctx.note(format!("table5: scene {name} skipped: {why}"));
-                bar.inc(1);
-                continue;
-            }
+        let Some(scene) = frames::load_or_note(ctx, "table5", plan, name, spec) else {
+            bar.inc(1);
+            continue;
         };
         let r = frames::renderer(&scene, AccelKind::Bsp)?;
         for &b in backends {
