@@ -127,6 +127,19 @@ impl Kernel for Ops<'_> {
             let (lo, hi) = l.gather2(&table, idx2);
             push("gather2_lo", fb(lo));
             push("gather2_hi", fb(hi));
+            // gather2_near: indices close together, some near the table's end, which the
+            // avx512 backend reads through a window of 32 values of the table instead of lane
+            // by lane; a wider spread takes the hardware gather.
+            let near_table: Vec<f32> = (0..80).map(|k| inp.c[k % LEN] + k as f32).collect();
+            let spread = if inp.mask_bits & 1 == 1 { 7 } else { 31 };
+            let near = (l.splat_i32(inp.shift as i32 * 2) + (ib & l.splat_i32(spread)))
+                .min(l.splat_i32(78));
+            let (lo, hi) = l.gather2_near(&near_table, near);
+            push("gather2_near_lo", fb(lo));
+            push("gather2_near_hi", fb(hi));
+            let (lo, hi) = l.gather2_near(&table, idx2);
+            push("gather2_near_far_lo", fb(lo));
+            push("gather2_near_far_hi", fb(hi));
 
             // Stores, masked stores and round trips through slices.
             let mut buf = inp.c;
@@ -405,6 +418,8 @@ backend_tests!(
 /// One gather with lane `bad` (of the first `L::N`) set to `index`, the others in range.
 struct BadGather {
     which: u32,
+    /// Table length.
+    len: usize,
     bad: usize,
     index: i32,
 }
@@ -412,15 +427,16 @@ struct BadGather {
 impl Kernel for BadGather {
     type Output = ();
     fn run<L: Lanes>(self, l: L) {
-        let table = [1.0f32; 8];
-        let table_u = [1u32; 8];
+        let table = vec![1.0f32; self.len];
+        let table_u = vec![1u32; self.len];
         let mut idx = [1i32; 16];
         idx[self.bad % L::N] = self.index;
         let idx = l.load_i32(&idx);
         match self.which {
             0 => std::hint::black_box(l.gather(&table, idx).lane(0)).to_bits(),
             1 => std::hint::black_box(l.gather_u32(&table_u, idx).lane(0)) as u32,
-            _ => std::hint::black_box(l.gather2(&table, idx).0.lane(0)).to_bits(),
+            2 => std::hint::black_box(l.gather2(&table, idx).0.lane(0)).to_bits(),
+            _ => std::hint::black_box(l.gather2_near(&table, idx).0.lane(0)).to_bits(),
         };
     }
 }
@@ -429,24 +445,34 @@ impl Kernel for BadGather {
 fn gathers_outside_the_table_panic_with_the_index() {
     // Every backend checks its gather indices (bad input must not read out of bounds) and
     // names the offending index; gather2 reads `i + 1` too, so `len - 1` is outside it.
+    // Tables of 8 are shorter than gather2_near's window; in tables of 40 the other lanes'
+    // indices (1) and the window lie inside the table.
     for backend in Backend::usable() {
-        for which in 0..3 {
-            let len = if which == 2 { 7 } else { 8 };
-            for (bad, index) in [(0, -1), (3, len), (15, i32::MAX), (5, i32::MIN)] {
-                let result =
-                    std::panic::catch_unwind(|| backend.run(BadGather { which, bad, index }));
-                let err = result.expect_err(&format!(
-                    "{backend}: gather {which} of {index} did not panic"
-                ));
-                let msg = err
-                    .downcast_ref::<String>()
-                    .cloned()
-                    .or_else(|| err.downcast_ref::<&str>().map(|s| s.to_string()))
-                    .unwrap_or_default();
-                assert!(
-                    msg.contains(&format!("gather index {index} outside a table of")),
-                    "{backend}: gather {which}: {msg:?}"
-                );
+        for which in 0..4 {
+            for table_len in [8, 40] {
+                let len = if which >= 2 { table_len - 1 } else { table_len } as i32;
+                for (bad, index) in [(0, -1), (3, len), (15, i32::MAX), (5, i32::MIN)] {
+                    let result = std::panic::catch_unwind(|| {
+                        backend.run(BadGather {
+                            which,
+                            len: table_len,
+                            bad,
+                            index,
+                        })
+                    });
+                    let err = result.expect_err(&format!(
+                        "{backend}: gather {which} of {index} (table of {table_len}) did not panic"
+                    ));
+                    let msg = err
+                        .downcast_ref::<String>()
+                        .cloned()
+                        .or_else(|| err.downcast_ref::<&str>().map(|s| s.to_string()))
+                        .unwrap_or_default();
+                    assert!(
+                        msg.contains(&format!("gather index {index} outside a table of")),
+                        "{backend}: gather {which}: {msg:?}"
+                    );
+                }
             }
         }
     }

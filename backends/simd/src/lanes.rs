@@ -75,6 +75,15 @@ pub trait Lanes: Copy + Debug + Send + Sync + 'static {
         let lo = self.gather(&table[..table.len().saturating_sub(1)], idx);
         (lo, self.gather(&table[1..], idx))
     }
+    /// [`Lanes::gather2`] for lookups whose lanes are expected to lie close together (a
+    /// coherent packet's lookups in the table of a smooth function, such as the paper's
+    /// `exp`): the same values and the same panics. Backends whose gathers are slow may read
+    /// a window of the table around the lanes' indices when they all fall in it, and gather
+    /// otherwise (`avx512`); the rest gather.
+    #[inline(always)]
+    fn gather2_near(self, table: &[f32], idx: Self::I32s) -> (Self::F32s, Self::F32s) {
+        self.gather2(table, idx)
+    }
 
     /// Lanes from a function of the lane index (packing, tests; not for hot loops).
     #[inline(always)]

@@ -55,7 +55,8 @@ fn table<L: Lanes>(l: L, x: L::F32s) -> L::F32s {
     let t = (x - TABLE_MIN) * TABLE_SCALE;
     let i = t.to_i32().max(l.splat_i32(0)).min(l.splat_i32(1023));
     let f = t - i.to_f32();
-    let (v0, v1) = l.gather2(&EXP, i);
+    // Coherent packets (neighbouring pixels' exposures, a sweep) read neighbouring entries.
+    let (v0, v1) = l.gather2_near(&EXP, i);
     (v1 - v0).mul_add(f, v0)
 }
 
