@@ -32,8 +32,8 @@
 //! so it has width-1 rows only. A scene of one untransformed instance has no instance level in
 //! any of them. All trace the same rays (the secondary rays come from the BSP's hits). An
 //! accelerator that cannot run here (Embree without its library) and a mesh that is not
-//! fetched are noted and left out. What Embree runs (version, ISA, native packet widths) and
-//! which build measured (portable or native) go into `machine.json`.
+//! fetched are noted and left out. What Embree runs (version, ISA, native packet widths) goes
+//! into `machine.json` (key `embree`; every run writes which build measured under `build`).
 
 use std::collections::BTreeMap;
 
@@ -781,46 +781,33 @@ fn disagreement(reference: &PassResult, r: &PassResult, rays: usize) -> Option<S
 }
 
 /// Writes what Embree runs here into `machine.json` (key `embree`: version, isa,
-/// native_packets) and which build measured (key `build`: `native` when compiled with
-/// `-C target-cpu=native`, else `portable`), and notes it.
+/// native_packets; see [`crate::machine_keys`]) and notes it.
 fn record_embree(ctx: &mut Ctx) {
-    let path = ctx.path("machine.json");
-    let Ok(text) = std::fs::read_to_string(&path) else {
-        return;
-    };
-    // Appended as text, so the contract's keys keep their order.
-    let Some(body) = text.trim_end().strip_suffix('}') else {
-        return;
-    };
-    if text.contains("\"build\":") {
-        return;
-    }
-    let native = ctx.machine.rustflags.contains("target-cpu=native");
-    #[cfg_attr(not(feature = "embree"), allow(unused_mut, clippy::useless_vec))]
-    let mut extra = vec![format!(
-        "\"build\": \"{}\"",
-        if native { "native" } else { "portable" }
-    )];
     #[cfg(feature = "embree")]
-    match coherent::embree::info() {
-        Ok(i) => {
-            ctx.note(format!(
-                "accel: Embree {} runs its {} kernels here, native packets of {:?}",
-                i.version, i.isa, i.native_packets
-            ));
-            extra.push(format!(
-                "\"embree\": {}",
-                serde_json::json!({
+    {
+        let path = ctx.path("machine.json");
+        let Ok(text) = std::fs::read_to_string(&path) else {
+            return;
+        };
+        match coherent::embree::info() {
+            Ok(i) => {
+                ctx.note(format!(
+                    "accel: Embree {} runs its {} kernels here, native packets of {:?}",
+                    i.version, i.isa, i.native_packets
+                ));
+                let value = serde_json::json!({
                     "version": i.version,
                     "isa": i.isa,
                     "native_packets": i.native_packets,
-                })
-            ));
+                });
+                let text = crate::machine_keys::set_key(&text, "embree", &value.to_string());
+                let _ = std::fs::write(&path, text);
+            }
+            Err(e) => ctx.note(format!("accel: no Embree to describe: {e}")),
         }
-        Err(e) => ctx.note(format!("accel: no Embree to describe: {e}")),
     }
-    let text = format!("{},\n  {}\n}}\n", body.trim_end(), extra.join(",\n  "));
-    let _ = std::fs::write(&path, text);
+    #[cfg(not(feature = "embree"))]
+    let _ = ctx;
 }
 
 /// Traversal counters over packets of the backend's width.

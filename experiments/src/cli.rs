@@ -131,8 +131,12 @@ fn run(
         return write_readme(&ctx, registry, info);
     }
     let machine = Machine::detect();
-    std::fs::write(&machine_json, machine.to_json() + "\n")
-        .with_context(|| format!("cannot write {}", machine_json.display()))?;
+    let previous = std::fs::read_to_string(&machine_json).ok();
+    std::fs::write(
+        &machine_json,
+        crate::machine_keys::machine_json(&machine, previous.as_deref()),
+    )
+    .with_context(|| format!("cannot write {}", machine_json.display()))?;
     let mut ctx = Ctx::new(&out, args.quick, machine);
     eprintln!(
         "reproduce: {} run into {} ({} experiment{})",

@@ -10,6 +10,7 @@ pub mod cli;
 pub mod ctx;
 pub mod experiment;
 pub mod frames;
+pub mod machine_keys;
 pub mod plot;
 pub mod readme;
 pub mod table;
