@@ -228,10 +228,11 @@ impl Axis {
                 lower = hit2.select(probe, lower);
                 inv = hit2.select(probe_inv, inv);
                 // Further levels gather the probed node and its width per lane, one
-                // 64-bit gather for both.
+                // 64-bit gather for both (axes are short: backends with slow gathers may
+                // read the whole axis into registers instead).
                 for &half in &h[3..] {
                     let probe = base + l.splat_i32(half);
-                    let (node, node_inv) = l.gather2(&self.node_invs, probe + probe);
+                    let (node, node_inv) = l.gather2_near(&self.node_invs, probe + probe);
                     let hit = node.le(x);
                     base = hit.select_i32(probe, base);
                     lower = hit.select(node, lower);

@@ -140,6 +140,10 @@ impl Kernel for Ops<'_> {
             let (lo, hi) = l.gather2_near(&table, idx2);
             push("gather2_near_far_lo", fb(lo));
             push("gather2_near_far_hi", fb(hi));
+            // A table shorter than the window: read whole (masked loads), any spread.
+            let (lo, hi) = l.gather2_near(&table[..20], idx2.min(l.splat_i32(18)));
+            push("gather2_near_short_lo", fb(lo));
+            push("gather2_near_short_hi", fb(hi));
 
             // Stores, masked stores and round trips through slices.
             let mut buf = inp.c;

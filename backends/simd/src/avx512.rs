@@ -177,13 +177,14 @@ impl Lanes for Avx512 {
     }
     #[inline(always)]
     fn gather2_near(self, table: &[f32], idx: I32x16) -> (F32x16, F32x16) {
-        match window16(idx, table.len(), WINDOW16 - 2) {
-            // SAFETY: `window16` checked `at + WINDOW16 <= table.len()`, and every offset (and
-            // so offset + 1) inside the window.
+        match window16(idx, table.len()) {
+            // SAFETY: `window16` checked that the window's values from `at` it reads lie in
+            // `table` and that every offset + 1 lies among them.
             Some((at, d)) => unsafe {
                 let p = table.as_ptr().add(at);
+                let len = table.len() - at;
                 let d1 = _mm512_add_epi32(d, _mm512_set1_epi32(1));
-                (F32x16(lookup32(p, d)), F32x16(lookup32(p, d1)))
+                (F32x16(lookup32(p, len, d)), F32x16(lookup32(p, len, d1)))
             },
             None => self.gather2(table, idx),
         }
@@ -191,46 +192,67 @@ impl Lanes for Avx512 {
 }
 
 /// Values `gather2_near` reads at once: two registers, picked from by `vpermt2ps`.
-const WINDOW16: i32 = 32;
+const WINDOW16: usize = 32;
 
-/// The test of [`Lanes::gather2_near`]: whether the lanes' indices lie in a window of
-/// [`WINDOW16`] values, which two loads and one two-register permute read, where the hardware
-/// gather reads lane by lane. In a micro-benchmark on the Zen 4 of our results (a table of
-/// 1,025 values, in L1), a 16-lane `gather2` (a `vpgatherdq` pair) took 4-7 ns and the
-/// window 1 ns; in the `kernels` experiment the paper's exp went from 5.1-6.6x to 7.2-7.4x
-/// over scalar (three interleaved runs of each build). Taken for every gather, the test's
-/// cost where the window misses (log's table indexed by the mantissa, textures, the BDF's
-/// corners) made those kernels 6-20% slower, so only lookups that expect close lanes ask for
-/// it. The `avx2` backend keeps the hardware
-/// gather: its 8-lane gathers are cheap, and the same window there (four permutes and three
-/// blends per lookup, in AVX2's 16 registers) made the exp kernel 1.6-1.9x slower.
+/// The test of [`Lanes::gather2_near`]: whether the lanes' pairs lie in a window of
+/// [`WINDOW16`] values (or in the whole table, when it is shorter), which two loads and one
+/// two-register permute read, where the hardware gather reads lane by lane. In a
+/// micro-benchmark on the Zen 4 of our results (a table of 1,025 values, in L1), a 16-lane
+/// `gather2` (a `vpgatherdq` pair) took 4-7 ns and the window 1 ns; in the `kernels`
+/// experiment the paper's exp went from 5.1-6.6x to 7.2-7.4x over scalar (three interleaved
+/// runs of each build). Taken for every gather, the test's cost where the window misses
+/// (log's table indexed by the mantissa, textures, the BDF's corners) made those kernels
+/// 6-20% slower, so only lookups that expect close lanes or short tables ask for it. The
+/// `avx2` backend keeps the hardware gather: its 8-lane gathers are cheap, and the same
+/// window there (four permutes and three blends per lookup, in AVX2's 16 registers) made the
+/// exp kernel 1.6-1.9x slower.
 ///
-/// The window starts at the smallest index (moved back to end at the table's end). Returns
-/// its start and every lane's offset into it when all offsets lie in `0..=reach` and the
-/// window lies inside a table of `len` values; `None` sends the lookup to the hardware
-/// gather (with its range check), so the result is the same either way.
+/// The window starts at the smallest index, moved back to end at the table's end (at 0 in a
+/// table shorter than the window). Returns its start and every lane's offset into it when
+/// every lane's pair (offset and offset + 1) lies inside both the window and the table;
+/// `None` sends the lookup to the hardware gather (with its range check), so the result is
+/// the same either way.
 #[inline(always)]
-fn window16(idx: I32x16, len: usize, reach: i32) -> Option<(usize, __m512i)> {
-    if len < WINDOW16 as usize {
+fn window16(idx: I32x16, len: usize) -> Option<(usize, __m512i)> {
+    // The largest offset whose pair is inside: the window's second-last value, or the table's.
+    let (at, reach) = if len >= WINDOW16 {
+        let end = (len - WINDOW16).min(i32::MAX as usize) as i32;
+        // SAFETY: the lane type proves AVX-512 F.
+        (
+            unsafe { _mm512_reduce_min_epi32(idx.0) }.min(end),
+            WINDOW16 - 2,
+        )
+    } else if len >= 2 {
+        (0, len - 2)
+    } else {
         return None;
-    }
+    };
     unsafe {
-        let at = _mm512_reduce_min_epi32(idx.0)
-            .min((len - WINDOW16 as usize).min(i32::MAX as usize) as i32);
         let d = _mm512_sub_epi32(idx.0, _mm512_set1_epi32(at));
         // Unsigned: an index below the window's start gives a huge offset.
-        let all = _mm512_cmple_epu32_mask(d, _mm512_set1_epi32(reach)) == 0xffff;
+        let all = _mm512_cmple_epu32_mask(d, _mm512_set1_epi32(reach as i32)) == 0xffff;
         (all && at >= 0).then_some((at as usize, d))
     }
 }
 
-/// `p[d[i]]` per lane for offsets `d` in `0..32`.
+/// `p[d[i]]` per lane for offsets `d` in `0..32` and below `len`: the first 32 values from
+/// `p` (fewer when `len` is smaller: the loads are masked to the first `len`, and masked-off
+/// elements are never read) picked by `vpermt2ps`.
 ///
 /// # Safety
-/// `p` must be valid for reading 32 values.
+/// `p` must be valid for reading `len.min(32)` values.
 #[inline(always)]
-unsafe fn lookup32(p: *const f32, d: __m512i) -> __m512 {
-    unsafe { _mm512_permutex2var_ps(_mm512_loadu_ps(p), d, _mm512_loadu_ps(p.add(16))) }
+unsafe fn lookup32(p: *const f32, len: usize, d: __m512i) -> __m512 {
+    unsafe {
+        if len >= WINDOW16 {
+            _mm512_permutex2var_ps(_mm512_loadu_ps(p), d, _mm512_loadu_ps(p.add(16)))
+        } else {
+            let bits = |n: usize| ((1u32 << n.min(16)) - 1) as __mmask16;
+            let lo = _mm512_maskz_loadu_ps(bits(len), p);
+            let hi = _mm512_maskz_loadu_ps(bits(len.saturating_sub(16)), p.add(16));
+            _mm512_permutex2var_ps(lo, d, hi)
+        }
+    }
 }
 
 #[inline(always)]

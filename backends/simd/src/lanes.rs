@@ -77,9 +77,10 @@ pub trait Lanes: Copy + Debug + Send + Sync + 'static {
     }
     /// [`Lanes::gather2`] for lookups whose lanes are expected to lie close together (a
     /// coherent packet's lookups in the table of a smooth function, such as the paper's
-    /// `exp`): the same values and the same panics. Backends whose gathers are slow may read
-    /// a window of the table around the lanes' indices when they all fall in it, and gather
-    /// otherwise (`avx512`); the rest gather.
+    /// `exp`) or in a short table (a tabulated BDF's axis): the same values and the same
+    /// panics. Backends whose gathers are slow may read a window of the table around the
+    /// lanes' indices when they all fall in it, and gather otherwise (`avx512`: 32 values);
+    /// the rest gather.
     #[inline(always)]
     fn gather2_near(self, table: &[f32], idx: Self::I32s) -> (Self::F32s, Self::F32s) {
         self.gather2(table, idx)
