@@ -19,8 +19,8 @@ use crate::{AccelError, Hit1, Hits, Instance, Ray1, Rays, Scene};
 /// - when two triangles are hit at the same `t` (a shared edge, coplanar overlap), which one
 ///   is reported is unspecified;
 /// - a hit within [`crate::EDGE_EPS`] (barycentric) of a triangle's edge, inside or in the
-///   tolerance band the projection test accepts beyond the edge for watertightness, may be
-///   missed: accelerators reference a triangle in the cells its exact shape reaches, and
+///   tolerance band the projection test accepts beyond an edge the mesh shares (for
+///   watertightness; outline edges take no band, [`crate::edges`]), may be missed: accelerators reference a triangle in the cells its exact shape reaches, and
 ///   rounding decides on which side of an edge such a hit truly is. Hits farther inside are
 ///   always found (watertightness is measured by `backends/bsp/tests/watertight.rs`).
 ///

@@ -38,9 +38,7 @@ impl Accel for BruteForce {
             .meshes
             .iter()
             .map(|m| {
-                let recs: Vec<TriAccel> = (0..m.indices.len())
-                    .filter_map(|i| TriAccel::new(m.triangle(i), i as u32))
-                    .collect();
+                let (recs, _) = crate::edges::mesh_records(&m.positions, &m.indices);
                 degenerate += m.indices.len() - recs.len();
                 recs
             })

@@ -6,12 +6,14 @@
 //! - [`Ray1`]/[`Hit1`] and [`Rays`]/[`Hits`]: single-ray and packet queries.
 //! - [`Accel`]: the interface every accelerator implements (BSP, Embree, obvhs), and
 //!   [`BuildStats`].
-//! - [`TriAccel`]: the projection ray-triangle test shared by the accelerators of this family.
+//! - [`TriAccel`]: the projection ray-triangle test shared by the accelerators of this family,
+//!   and [`edges::mesh_records`]: a mesh's records, the band beyond edges on shared ones only.
 //! - [`BruteForce`]: the reference implementation for tests.
 
 pub mod aabb;
 pub mod accel;
 pub mod brute;
+pub mod edges;
 pub mod error;
 pub mod instance;
 pub mod mesh;
@@ -33,4 +35,4 @@ pub use mesh::Mesh;
 pub use packet::{Hits, Rays, Vec3s};
 pub use ray::{Hit1, Ray1, transform_point1, transform_vector1};
 pub use scene::Scene;
-pub use triangle::{EDGE_EPS, MIN_THINNESS, TriAccel};
+pub use triangle::{ALL_EDGES, EDGE_EPS, MIN_THINNESS, TriAccel};

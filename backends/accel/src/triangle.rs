@@ -9,7 +9,10 @@
 //!   first vertex `a` (so the rounding error scales with the ray's distance to the triangle,
 //!   not with the coordinates' magnitude);
 //! - the barycentric tests accept `u, v >= -EDGE_EPS` and `u + v <= 1 + EDGE_EPS`, so two
-//!   triangles sharing an edge overlap by a sliver instead of leaving a crack.
+//!   triangles sharing an edge overlap by a sliver instead of leaving a crack. A record says
+//!   per edge whether it takes that band ([`TriAccel::with_shared_edges`]): a mesh's records
+//!   built by [`crate::edges::mesh_records`] take it on shared edges only, so the outline of
+//!   an open mesh is tested exactly and its silhouette is not widened.
 //!
 //! Every accelerator of this crate family uses this record, so their answers can be compared
 //! bit for bit with [`crate::BruteForce`].
@@ -58,8 +61,29 @@ pub struct TriAccel {
     pub b_nv: f32,
     pub c_nu: f32,
     pub c_nv: f32,
-    _pad: u32,
+    /// Which edges take the [`EDGE_EPS`] band: bit 0 the edge `a-c` (where `u = 0`), bit 1
+    /// the edge `a-b` (`v = 0`), bit 2 the edge `b-c` (`u + v = 1`). [`TriAccel::new`] sets
+    /// all three ([`ALL_EDGES`]).
+    pub edges: u32,
 }
+
+/// [`TriAccel::edges`] with the band on every edge.
+pub const ALL_EDGES: u32 = 0b111;
+
+/// The barycentric bounds `(lowest u, lowest v, highest u + v, unused)` per
+/// [`TriAccel::edges`] value, read by index so that the tests stay free of branches.
+const BOUNDS: [[f32; 4]; 8] = {
+    let mut b = [[0.0; 4]; 8];
+    let mut e = 0;
+    while e < 8 {
+        let lo_u = if e & 1 == 1 { -EDGE_EPS } else { 0.0 };
+        let lo_v = if e & 2 == 2 { -EDGE_EPS } else { 0.0 };
+        let hi = if e & 4 == 4 { 1.0 + EDGE_EPS } else { 1.0 };
+        b[e] = [lo_u, lo_v, hi, 0.0];
+        e += 1;
+    }
+    b
+};
 
 /// The axes `u`, `v` that follow `k`.
 #[inline(always)]
@@ -122,10 +146,26 @@ impl TriAccel {
             b_nv: (-e2[u] / nk) as f32,
             c_nu: (-e1[v] / nk) as f32,
             c_nv: (e1[u] / nk) as f32,
-            _pad: 0,
+            edges: ALL_EDGES,
         };
         let coeffs = [rec.n_u, rec.n_v, rec.b_nu, rec.b_nv, rec.c_nu, rec.c_nv];
         coeffs.iter().all(|x| x.is_finite()).then_some(rec)
+    }
+
+    /// This record with the [`EDGE_EPS`] band on the edges `shared` says are shared (edges
+    /// `p0-p1`, `p1-p2`, `p2-p0` of the vertices given to [`TriAccel::new`], as
+    /// [`crate::edges::shared_edges`] lists them) and none on the others.
+    pub fn with_shared_edges(mut self, shared: [bool; 3]) -> Self {
+        let [ab, bc, ca] = shared;
+        self.edges = ca as u32 | (ab as u32) << 1 | (bc as u32) << 2;
+        self
+    }
+
+    /// The barycentric bounds of a hit: `(lowest u, lowest v, highest u + v)`.
+    #[inline(always)]
+    pub fn bounds(&self) -> (f32, f32, f32) {
+        let [lo_u, lo_v, hi, _] = BOUNDS[(self.edges & ALL_EDGES) as usize];
+        (lo_u, lo_v, hi)
     }
 
     /// The hit `(t, u, v)` of the ray `o + t d` with `tmin <= t < tmax`, if any.
@@ -156,13 +196,14 @@ impl TriAccel {
         }
         let hu = wu + t * du;
         let hv = wv + t * dv;
+        let (lo_u, lo_v, hi) = self.bounds();
         let beta = self.b_nu * hu + self.b_nv * hv;
-        if beta < -EDGE_EPS {
+        if beta < lo_u {
             return None;
         }
         let gamma = self.c_nu * hu + self.c_nv * hv;
         // Written so that NaN barycentrics are rejected.
-        let inside = gamma >= -EDGE_EPS && beta + gamma <= 1.0 + EDGE_EPS;
+        let inside = gamma >= lo_v && beta + gamma <= hi;
         inside.then_some((t, beta, gamma))
     }
 
@@ -212,8 +253,8 @@ impl TriAccel {
         let hv = wv + t * dv;
         let beta = l.splat(self.b_nu) * hu + l.splat(self.b_nv) * hv;
         let gamma = l.splat(self.c_nu) * hu + l.splat(self.c_nv) * hv;
-        let neg_eps = l.splat(-EDGE_EPS);
-        m = m & beta.ge(neg_eps) & gamma.ge(neg_eps) & (beta + gamma).le(l.splat(1.0 + EDGE_EPS));
+        let (lo_u, lo_v, hi) = self.bounds();
+        m = m & beta.ge(l.splat(lo_u)) & gamma.ge(l.splat(lo_v)) & (beta + gamma).le(l.splat(hi));
         (m, t, beta, gamma)
     }
 }
@@ -279,6 +320,64 @@ mod tests {
                 true,
             );
             assert_eq!(one, m.then_some((t, u, v)));
+        }
+    }
+
+    #[test]
+    fn the_band_lies_beyond_shared_edges_only() {
+        // The unit right triangle in z = 0; rays straight down just outside each edge, by half
+        // the band: hits while the edge takes the band, misses once it does not.
+        let p = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let out = 0.5 * EDGE_EPS;
+        let beyond = [
+            Vec3::new(0.5, -out, 1.0),            // edge p0-p1 (v < 0)
+            Vec3::new(0.5 + out, 0.5 + out, 1.0), // edge p1-p2 (u + v > 1)
+            Vec3::new(-out, 0.5, 1.0),            // edge p2-p0 (u < 0)
+        ];
+        let all = TriAccel::new(p, 0).unwrap();
+        assert_eq!(all.edges, ALL_EDGES);
+        assert_eq!(all, all.with_shared_edges([true; 3]));
+        for (e, &o) in beyond.iter().enumerate() {
+            assert!(
+                all.intersect1(o, -Vec3::Z, 0.0, f32::INFINITY).is_some(),
+                "edge {e}"
+            );
+            let mut shared = [true; 3];
+            shared[e] = false;
+            let one = all.with_shared_edges(shared);
+            assert_eq!(
+                one.intersect1(o, -Vec3::Z, 0.0, f32::INFINITY),
+                None,
+                "edge {e}"
+            );
+            // Only that edge is exact: the others still take the band.
+            for (f, &o2) in beyond.iter().enumerate().filter(|&(f, _)| f != e) {
+                assert!(
+                    one.intersect1(o2, -Vec3::Z, 0.0, f32::INFINITY).is_some(),
+                    "{e} {f}"
+                );
+            }
+            // The packet form agrees.
+            let l = Scalar;
+            let (m, ..) = one.intersect(
+                l,
+                &Vec3s::splat(l, o),
+                &Vec3s::splat(l, -Vec3::Z),
+                0.0,
+                f32::INFINITY,
+                true,
+            );
+            assert!(!m, "edge {e}");
+            // Inside the exact edge by as little still hits.
+            let inside = [
+                Vec3::new(0.5, out, 1.0),
+                Vec3::new(0.5 - out, 0.5 - out, 1.0),
+                Vec3::new(out, 0.5, 1.0),
+            ][e];
+            assert!(
+                one.intersect1(inside, -Vec3::Z, 0.0, f32::INFINITY)
+                    .is_some()
+            );
         }
     }
 }

@@ -27,7 +27,9 @@ pub struct MeshTree {
 }
 
 impl MeshTree {
-    /// Builds the tree of one mesh's positions and triangles (validated).
+    /// Builds the tree of one mesh's positions and triangles (validated); the records take
+    /// the [`coherent_accel::EDGE_EPS`] band on shared edges only
+    /// ([`coherent_accel::edges::mesh_records`]).
     ///
     /// The tree is built over the exact triangles, not over the band of
     /// [`coherent_accel::EDGE_EPS`] the projection test also accepts beyond their edges: so a
@@ -36,15 +38,7 @@ impl MeshTree {
     /// about the centroid) made every box face straddle its neighbours' planes, so a box's 12
     /// triangles stayed in one leaf (13.8 triangle tests per primary ray in `room`).
     pub fn build(positions: &[Vec3], indices: &[[u32; 3]], p: &crate::SahParams) -> Self {
-        let mut tris = Vec::with_capacity(indices.len());
-        let mut verts = Vec::with_capacity(indices.len());
-        for (i, t) in indices.iter().enumerate() {
-            let v = t.map(|j| positions[j as usize]);
-            if let Some(rec) = TriAccel::new(v, i as u32) {
-                tris.push(rec);
-                verts.push(v);
-            }
-        }
+        let (tris, verts) = coherent_accel::edges::mesh_records(positions, indices);
         Self {
             tree: build_sah(&verts, p),
             degenerate: indices.len() - tris.len(),

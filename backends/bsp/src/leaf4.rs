@@ -13,7 +13,6 @@
 //! one triangle at a time, as the paper's non-SSE code was.
 
 use coherent_accel::TriAccel;
-use coherent_accel::triangle::EDGE_EPS;
 use glam::{BVec4A, Vec4};
 
 use crate::KdTree;
@@ -34,6 +33,11 @@ pub struct Tri4 {
     b_nv: Vec4,
     c_nu: Vec4,
     c_nv: Vec4,
+    /// Per lane the barycentric bounds ([`TriAccel::bounds`]): lowest `u`, lowest `v`,
+    /// highest `u + v`.
+    lo_u: Vec4,
+    lo_v: Vec4,
+    hi: Vec4,
     /// Triangle index in the mesh per lane.
     pub prim: [u32; 4],
     /// Record index per lane (into the mesh's records; `u32::MAX` for padding).
@@ -65,6 +69,9 @@ impl Tri4 {
             b_nv: get(&|r| r.b_nv, 0.0),
             c_nu: get(&|r| r.c_nu, 0.0),
             c_nv: get(&|r| r.c_nv, 0.0),
+            lo_u: get(&|r| r.bounds().0, 0.0),
+            lo_v: get(&|r| r.bounds().1, 0.0),
+            hi: get(&|r| r.bounds().2, 1.0),
             prim: core::array::from_fn(|j| recs.get(j).map_or(u32::MAX, |(_, r)| r.prim)),
             rec: core::array::from_fn(|j| recs.get(j).map_or(u32::MAX, |(i, _)| *i)),
         }
@@ -98,10 +105,7 @@ impl Tri4 {
         let hv = wv + t * dv;
         let beta = self.b_nu * hu + self.b_nv * hv;
         let gamma = self.c_nu * hu + self.c_nv * hv;
-        let neg_eps = Vec4::splat(-EDGE_EPS);
-        m &= beta.cmpge(neg_eps)
-            & gamma.cmpge(neg_eps)
-            & (beta + gamma).cmple(Vec4::splat(1.0 + EDGE_EPS));
+        m &= beta.cmpge(self.lo_u) & gamma.cmpge(self.lo_v) & (beta + gamma).cmple(self.hi);
         (m.bitmask(), t.to_array(), beta.to_array(), gamma.to_array())
     }
 }
