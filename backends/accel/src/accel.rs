@@ -20,8 +20,9 @@ use crate::{AccelError, Hit1, Hits, Instance, Ray1, Rays, Scene};
 ///   is reported is unspecified;
 /// - a hit within [`crate::EDGE_EPS`] (barycentric) of a triangle's edge, inside or in the
 ///   tolerance band the projection test accepts beyond an edge the mesh shares (for
-///   watertightness; outline edges take no band, [`crate::edges`]), may be missed: accelerators reference a triangle in the cells its exact shape reaches, and
-///   rounding decides on which side of an edge such a hit truly is. Hits farther inside are
+///   watertightness; outline edges take no band, see [`crate::edges`]), may be missed:
+///   accelerators reference a triangle in the cells its exact shape reaches, and rounding
+///   decides on which side of an edge such a hit truly is. Hits farther inside are
 ///   always found (watertightness is measured by `backends/bsp/tests/watertight.rs`).
 ///
 /// The packet forms have default implementations that loop over the active lanes and call

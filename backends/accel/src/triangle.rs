@@ -326,13 +326,14 @@ mod tests {
     #[test]
     fn the_band_lies_beyond_shared_edges_only() {
         // The unit right triangle in z = 0; rays straight down just outside each edge, by half
-        // the band: hits while the edge takes the band, misses once it does not.
+        // the band (in barycentric units): hits while the edge takes the band, misses once it
+        // does not.
         let p = [Vec3::ZERO, Vec3::X, Vec3::Y];
         let out = 0.5 * EDGE_EPS;
         let beyond = [
-            Vec3::new(0.5, -out, 1.0),            // edge p0-p1 (v < 0)
-            Vec3::new(0.5 + out, 0.5 + out, 1.0), // edge p1-p2 (u + v > 1)
-            Vec3::new(-out, 0.5, 1.0),            // edge p2-p0 (u < 0)
+            Vec3::new(0.5, -out, 1.0),                        // edge p0-p1 (v < 0)
+            Vec3::new(0.5 + out / 2.0, 0.5 + out / 2.0, 1.0), // edge p1-p2 (u + v > 1)
+            Vec3::new(-out, 0.5, 1.0),                        // edge p2-p0 (u < 0)
         ];
         let all = TriAccel::new(p, 0).unwrap();
         assert_eq!(all.edges, ALL_EDGES);
@@ -371,7 +372,7 @@ mod tests {
             // Inside the exact edge by as little still hits.
             let inside = [
                 Vec3::new(0.5, out, 1.0),
-                Vec3::new(0.5 - out, 0.5 - out, 1.0),
+                Vec3::new(0.5 - out / 2.0, 0.5 - out / 2.0, 1.0),
                 Vec3::new(out, 0.5, 1.0),
             ][e];
             assert!(
