@@ -134,6 +134,15 @@ impl Kernel for Ops<'_> {
             let spread = if inp.mask_bits & 1 == 1 { 7 } else { 31 };
             let near = (l.splat_i32(inp.shift as i32 * 2) + (ib & l.splat_i32(spread)))
                 .min(l.splat_i32(78));
+            push("gather_near", fb(l.gather_near(&near_table, near)));
+            // the last value of the table too: a single lookup's window reaches it
+            let last = near.max(l.splat_i32(inp.shift as i32 % 2 + 78));
+            push("gather_near_last", fb(l.gather_near(&near_table, last)));
+            push("gather_near_far", fb(l.gather_near(&table, idx2)));
+            push(
+                "gather_near_short",
+                fb(l.gather_near(&table[..20], idx2.min(l.splat_i32(19)))),
+            );
             let (lo, hi) = l.gather2_near(&near_table, near);
             push("gather2_near_lo", fb(lo));
             push("gather2_near_hi", fb(hi));
@@ -440,7 +449,8 @@ impl Kernel for BadGather {
             0 => std::hint::black_box(l.gather(&table, idx).lane(0)).to_bits(),
             1 => std::hint::black_box(l.gather_u32(&table_u, idx).lane(0)) as u32,
             2 => std::hint::black_box(l.gather2(&table, idx).0.lane(0)).to_bits(),
-            _ => std::hint::black_box(l.gather2_near(&table, idx).0.lane(0)).to_bits(),
+            3 => std::hint::black_box(l.gather2_near(&table, idx).0.lane(0)).to_bits(),
+            _ => std::hint::black_box(l.gather_near(&table, idx).lane(0)).to_bits(),
         };
     }
 }
@@ -449,12 +459,16 @@ impl Kernel for BadGather {
 fn gathers_outside_the_table_panic_with_the_index() {
     // Every backend checks its gather indices (bad input must not read out of bounds) and
     // names the offending index; gather2 reads `i + 1` too, so `len - 1` is outside it.
-    // Tables of 8 are shorter than gather2_near's window; in tables of 40 the other lanes'
+    // Tables of 8 are shorter than the near gathers' window; in tables of 40 the other lanes'
     // indices (1) and the window lie inside the table.
     for backend in Backend::usable() {
-        for which in 0..4 {
+        for which in 0..5 {
             for table_len in [8, 40] {
-                let len = if which >= 2 { table_len - 1 } else { table_len } as i32;
+                let len = if which == 2 || which == 3 {
+                    table_len - 1
+                } else {
+                    table_len
+                } as i32;
                 for (bad, index) in [(0, -1), (3, len), (15, i32::MAX), (5, i32::MIN)] {
                     let result = std::panic::catch_unwind(|| {
                         backend.run(BadGather {

@@ -176,8 +176,20 @@ impl Lanes for Avx512 {
         }
     }
     #[inline(always)]
+    fn gather_near(self, table: &[f32], idx: I32x16) -> F32x16 {
+        match window16(idx, table.len(), 1) {
+            // SAFETY: `window16` checked that the window's values from `at` it reads lie in
+            // `table` and that every offset lies among them.
+            Some((at, d)) => unsafe {
+                let p = table.as_ptr().add(at);
+                F32x16(lookup32(p, table.len() - at, d))
+            },
+            None => self.gather(table, idx),
+        }
+    }
+    #[inline(always)]
     fn gather2_near(self, table: &[f32], idx: I32x16) -> (F32x16, F32x16) {
-        match window16(idx, table.len()) {
+        match window16(idx, table.len(), 2) {
             // SAFETY: `window16` checked that the window's values from `at` it reads lie in
             // `table` and that every offset + 1 lies among them.
             Some((at, d)) => unsafe {
@@ -209,21 +221,22 @@ const WINDOW16: usize = 32;
 ///
 /// The window starts at the smallest index, moved back to end at the table's end (at 0 in a
 /// table shorter than the window). Returns its start and every lane's offset into it when
-/// every lane's pair (offset and offset + 1) lies inside both the window and the table;
-/// `None` sends the lookup to the hardware gather (with its range check), so the result is
-/// the same either way.
+/// every lane's `span` values (1: the offset; 2: the pair offset, offset + 1) lie inside both
+/// the window and the table; `None` sends the lookup to the hardware gather (with its range
+/// check), so the result is the same either way. [`Lanes::gather_near`] asks for the same
+/// window with `span` 1.
 #[inline(always)]
-fn window16(idx: I32x16, len: usize) -> Option<(usize, __m512i)> {
-    // The largest offset whose pair is inside: the window's second-last value, or the table's.
+fn window16(idx: I32x16, len: usize, span: usize) -> Option<(usize, __m512i)> {
+    // The largest offset whose `span` values are inside the window, or the table.
     let (at, reach) = if len >= WINDOW16 {
         let end = (len - WINDOW16).min(i32::MAX as usize) as i32;
         // SAFETY: the lane type proves AVX-512 F.
         (
             unsafe { _mm512_reduce_min_epi32(idx.0) }.min(end),
-            WINDOW16 - 2,
+            WINDOW16 - span,
         )
-    } else if len >= 2 {
-        (0, len - 2)
+    } else if len >= span {
+        (0, len - span)
     } else {
         return None;
     };

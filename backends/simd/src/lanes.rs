@@ -75,6 +75,12 @@ pub trait Lanes: Copy + Debug + Send + Sync + 'static {
         let lo = self.gather(&table[..table.len().saturating_sub(1)], idx);
         (lo, self.gather(&table[1..], idx))
     }
+    /// [`Lanes::gather`] for lookups whose lanes are expected to lie close together or in a
+    /// short table, as [`Lanes::gather2_near`]: the same values and the same panics.
+    #[inline(always)]
+    fn gather_near(self, table: &[f32], idx: Self::I32s) -> Self::F32s {
+        self.gather(table, idx)
+    }
     /// [`Lanes::gather2`] for lookups whose lanes are expected to lie close together (a
     /// coherent packet's lookups in the table of a smooth function, such as the paper's
     /// `exp`) or in a short table (a tabulated BDF's axis): the same values and the same

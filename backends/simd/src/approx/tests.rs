@@ -226,3 +226,16 @@ fn print_measured_errors() {
         }
     }
 }
+
+#[test]
+fn exp_table_step_growth_is_expm1_of_the_step() {
+    use super::exp::STEP_GROWTH;
+    // the step build.rs generates the table with: 10.2 / 1024 on [-14, -3.8]
+    let exact = (10.2f64 / 1024.0).exp_m1();
+    // the nearest f32: within half an ulp of the f64 value
+    assert!(
+        (STEP_GROWTH as f64 - exact).abs()
+            <= (exact as f32).abs() as f64 * f32::EPSILON as f64 / 2.0,
+        "{STEP_GROWTH} against {exact}"
+    );
+}
