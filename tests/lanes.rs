@@ -495,3 +495,47 @@ fn gathers_outside_the_table_panic_with_the_index() {
         }
     }
 }
+
+/// Every mask reduction on the patterns random bits rarely give at 8 and 16 lanes: no lane
+/// on, every lane on, one lane on, every lane but one on; from `mask_from_bits` and from a
+/// compare. The reductions are written per backend, and pulp's depend on how LLVM reads
+/// them (`backends/simd/src/pulp.rs`). `None` when they all hold, else the first failure.
+struct MaskPatterns;
+
+impl Kernel for MaskPatterns {
+    type Output = Option<String>;
+    fn run<L: Lanes>(self, l: L) -> Option<String> {
+        let n = L::N;
+        let full = u32::MAX >> (32 - n);
+        let mut patterns = vec![0, full];
+        for i in 0..n {
+            patterns.push(1 << i);
+            patterns.push(full & !(1 << i));
+        }
+        for bits in patterns {
+            let signs = l.from_fn(|i| if bits >> i & 1 == 1 { 1.0 } else { -1.0 });
+            for (how, m) in [
+                ("mask_from_bits", l.mask_from_bits(bits)),
+                ("compare", signs.gt(l.splat(0.0))),
+            ] {
+                let got = (m.bitmask(), m.any(), m.all(), m.none());
+                let want = (bits, bits != 0, bits == full, bits == 0);
+                if got != want {
+                    return Some(format!(
+                        "{how} {bits:b}: (bitmask, any, all, none) = {got:?}, want {want:?}"
+                    ));
+                }
+            }
+        }
+        None
+    }
+}
+
+#[test]
+fn mask_reductions_on_full_empty_and_single_lane_masks() {
+    for backend in Backend::usable() {
+        if let Some(failure) = backend.run(MaskPatterns).expect("usable backend") {
+            panic!("{backend}: {failure}");
+        }
+    }
+}
