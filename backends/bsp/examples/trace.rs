@@ -11,7 +11,7 @@
 //! traversal counters.
 //! KT, KI, BONUS, LEAF, DEPTH, PRESET, GROUP (leaves priced per group) / TOPBINS, TOPKI,
 //! TOPLEAF: override build parameters. SIMD_LEAVES=1: single rays test leaves 4 at a time.
-//! MIXED=0: packets walk per group of equal direction signs (the paper's way).
+//! MIXED=0: occlusion packets walk per group of equal direction signs.
 //! ```
 
 use coherent_accel::scenes::{self, BuiltinScene, SceneSize};

@@ -169,11 +169,10 @@ pub(crate) fn sign_groups<L: Lanes>(
 /// (`r.mixed`) walk together: at each split every lane goes to the child or children its own
 /// segment reaches, and the packet takes first the child nearer for most of its lanes. A lane
 /// may then meet its leaves out of order; the answers stay the same, since first hits only
-/// ever replace farther ones and entries beyond a lane's hit are still skipped. Entries are
-/// skipped for lanes whose `limit(s)` is before them; the walk ends as soon as `done(s)`
-/// (every lane of the query finished: occlusion found for all). A subtree whose active lanes
-/// are at most `thr` goes to `single(s, c, node, lanes, tn, tf)` instead (`thr = 0` never
-/// switches).
+/// ever replace farther ones and entries beyond a lane's hit are still skipped. Entries are skipped for lanes whose
+/// `limit(s)` is before them; the walk ends as soon as `done(s)` (every lane of the query
+/// finished: occlusion found for all). A subtree whose active lanes are at most `thr` goes to
+/// `single(s, c, node, lanes, tn, tf)` instead (`thr = 0` never switches).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn walk<L: Lanes, S, C: Counters>(

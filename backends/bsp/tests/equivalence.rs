@@ -23,7 +23,7 @@ fn param_sets(lanes: usize) -> Vec<BspParams> {
         let mut p = BspParams::preset(preset).unwrap();
         p.mailbox = mailbox;
         p.single_ray_threshold = thr;
-        // One set walks packets per group of equal direction signs, as the paper does.
+        // One set walks occlusion packets per group of equal direction signs.
         p.mixed_signs = preset != "fast";
         v.push(p);
     }
