@@ -1,9 +1,7 @@
 //! Packet traversal of the two-level BSP, as in paper section 3 (after Wald et al. 2001):
-//! the packet is tested against the scene box and walked near/far with an explicit stack;
-//! masks block lanes that do not enter a child or have finished. The paper (after Wald)
-//! splits a packet into groups of equal direction signs first; by default
-//! ([`crate::BspParams::mixed_signs`]) lanes of mixed signs walk together, each lane choosing
-//! its own near child; a node is skipped when every active lane's hit is nearer than it. When a
+//! the packet is tested against the scene box, split into groups of equal direction signs,
+//! and walked near/far with an explicit stack; masks block lanes that do not enter a child or
+//! have finished; a node is skipped when every active lane's hit is nearer than it. When a
 //! subtree's active lanes fall to a threshold, its lanes continue ray by ray.
 
 use coherent_accel::triangle::xyzz_s;
@@ -38,27 +36,18 @@ pub(crate) struct RaysX<L: Lanes> {
     pub tmin: L::F32s,
     /// Bit `k` set when the group's direction is negative along axis `k`.
     pub signs: u32,
-    /// Per axis (`[x, y, z, z]`), the lanes whose direction is negative along it.
-    pub neg: [L::Mask; 4],
-    /// The lanes do not share their direction signs (see [`walk`]): `signs` is unused and
-    /// each lane's near child is taken from `neg`.
-    pub mixed: bool,
 }
 
 impl<L: Lanes> RaysX<L> {
     #[inline(always)]
     pub fn new(l: L, o: &Vec3s<L>, d: &Vec3s<L>, tmin: L::F32s) -> Self {
         let one = l.splat(1.0);
-        let zero = l.splat_i32(0);
-        let nz = d.z.to_bits().lt(zero);
         Self {
             o: xyzz_s(o),
             d: xyzz_s(d),
             inv: [one / d.x, one / d.y, one / d.z, one / d.z],
             tmin,
             signs: 0,
-            neg: [d.x.to_bits().lt(zero), d.y.to_bits().lt(zero), nz, nz],
-            mixed: false,
         }
     }
 
@@ -128,21 +117,15 @@ pub(crate) fn sign_bits<L: Lanes>(l: L, d: &Vec3s<L>) -> [u32; 3] {
     ]
 }
 
-/// Calls `f(group, signs, false)` for each group of the lanes `m` with equal direction signs;
-/// with `together`, lanes of different signs stay one group: `f(m, 0, true)` (see [`walk`]).
+/// Calls `f(group, signs)` for each group of the lanes `m` with equal direction signs.
 #[inline(always)]
 pub(crate) fn sign_groups<L: Lanes>(
     l: L,
     m: L::Mask,
     neg: [u32; 3],
-    together: bool,
-    mut f: impl FnMut(L::Mask, u32, bool),
+    mut f: impl FnMut(L::Mask, u32),
 ) {
     let all = m.bitmask();
-    if together && neg.iter().any(|&n| n & all != 0 && n & all != all) {
-        f(m, 0, true);
-        return;
-    }
     let mut rest = all;
     while rest != 0 {
         let i = rest.trailing_zeros();
@@ -160,16 +143,12 @@ pub(crate) fn sign_groups<L: Lanes>(
         } else {
             m & l.mask_from_bits(group)
         };
-        f(gm, signs, false);
+        f(gm, signs);
     }
 }
 
 /// Walks `tree` from `start` with lanes `m` over per-lane segments `[tn, tf]`, front to
-/// back, calling `leaf(s, c, items, lanes)` at each leaf. Lanes of mixed direction signs
-/// (`r.mixed`) walk together: at each split every lane goes to the child or children its own
-/// segment reaches, and the packet takes first the child nearer for most of its lanes. A lane
-/// may then meet its leaves out of order; the answers stay the same, since first hits only
-/// ever replace farther ones and entries beyond a lane's hit are still skipped. Entries are skipped for lanes whose
+/// back, calling `leaf(s, c, items, lanes)` at each leaf. Entries are skipped for lanes whose
 /// `limit(s)` is before them; the walk ends as soon as `done(s)` (every lane of the query
 /// finished: occlusion found for all). A subtree whose active lanes are at most `thr` goes to
 /// `single(s, c, node, lanes, tn, tf)` instead (`thr = 0` never switches).
@@ -222,45 +201,6 @@ pub(crate) fn walk<L: Lanes, S, C: Counters>(
                 // `ts > tf`); NaN lanes reach both.
                 let go_near = m.and_not(ts.lt(tn));
                 let go_far = m.and_not(ts.gt(tf));
-                if r.mixed {
-                    // Per lane, the near child is the left one unless the lane's direction
-                    // is negative along `k`.
-                    let negk = r.neg[k];
-                    let flip = (go_near ^ go_far) & negk;
-                    let (go_left, go_right) = (go_near ^ flip, go_far ^ flip);
-                    let left = n.left();
-                    if go_right.none() {
-                        node = left;
-                    } else if go_left.none() {
-                        node = left + 1;
-                    } else {
-                        let near_tf = widen_hi(l, ts.min(tf));
-                        let far_tn = widen_lo(l, ts.max(tn));
-                        let left_seg = (negk.select(far_tn, tn), negk.select(tf, near_tf));
-                        let right_seg = (negk.select(tn, far_tn), negk.select(near_tf, tf));
-                        let (first, second) = if 2 * (negk & m).count() > m.count() {
-                            ((left + 1, right_seg, go_right), (left, left_seg, go_left))
-                        } else {
-                            ((left, left_seg, go_left), (left + 1, right_seg, go_right))
-                        };
-                        stack.push(Entry {
-                            node: second.0 as u32,
-                            tn: second.1.0,
-                            tf: second.1.1,
-                            m: second.2,
-                        });
-                        (node, (tn, tf), m) = first;
-                        if m.count() <= thr {
-                            c.handoff(m.count());
-                            single(s, c, node, m, tn, tf);
-                            if done(s) {
-                                return;
-                            }
-                            break;
-                        }
-                    }
-                    continue;
-                }
                 if go_far.none() {
                     node = near;
                 } else if go_near.none() {
@@ -418,11 +358,9 @@ fn enter_instance<L: Lanes, Q: QueryP<L>, C: Counters>(
         l,
         mm,
         neg,
-        bsp.params.mixed_signs,
         #[inline(always)]
-        |g, signs, mixed| {
+        |g, signs| {
             r.signs = signs;
-            r.mixed = mixed;
             mesh_packet(l, mesh, i, &r, t0, t1, g, thr, bsp.params.mailbox, q, c);
         },
     );
@@ -454,11 +392,9 @@ pub(crate) fn scene_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
             l,
             m,
             neg,
-            bsp.params.mixed_signs,
             #[inline(always)]
-            |g, signs, mixed| {
+            |g, signs| {
                 wr.signs = signs;
-                wr.mixed = mixed;
                 for &i in &bsp.top.items[root.items()] {
                     enter_instance(l, bsp, i, rays, &wr, g, thr, q, c);
                     if q.done() {
@@ -478,11 +414,9 @@ pub(crate) fn scene_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
         l,
         m,
         neg,
-        bsp.params.mixed_signs,
         #[inline(always)]
-        |g, signs, mixed| {
+        |g, signs| {
             wr.signs = signs;
-            wr.mixed = mixed;
             let mut seen = MailboxP::new();
             walk(
                 l,
