@@ -60,6 +60,7 @@ pub const EXPERIMENT: Experiment = Experiment {
         "accel_threshold.csv",
         "accel_traversal.csv",
         "accel_simd_leaves.csv",
+        "accel_mixed_signs.csv",
     ],
     plots: &[
         "accel_speedup_vs_width",
@@ -110,6 +111,16 @@ const THRESHOLD_HEADER: &[&str] = &[
     "backend",
     "threshold",
     "mrays_per_s",
+];
+const MIXED_HEADER: &[&str] = &[
+    "scene",
+    "rays",
+    "width",
+    "backend",
+    "per_group_mrays_per_s",
+    "together_mrays_per_s",
+    "speedup",
+    "sign_groups_per_packet",
 ];
 const TRAVERSAL_HEADER: &[&str] = &[
     "scene",
@@ -382,7 +393,7 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     let widths = widths(ctx);
     let all = scene_list(ctx, size);
     record_embree(ctx);
-    let bar = ctx.progress(all.len() as u64 * 2, "accel");
+    let bar = ctx.progress(all.len() as u64 * 3, "accel");
     let mut csv = ctx.csv("accel.csv", HEADER)?;
     let mut trav = ctx.csv("accel_traversal.csv", TRAVERSAL_HEADER)?;
     #[cfg_attr(not(feature = "embree"), allow(unused_mut, unused_variables))]
@@ -640,9 +651,76 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
         bar.inc(1);
     }
     thr.finish()?;
+
+    // Packets whose lanes differ in direction signs: walked together (the default) against
+    // one walk per group of equal signs (the paper's way), on the same rays, interleaved.
+    let mut mixed = ctx.csv("accel_mixed_signs.csv", MIXED_HEADER)?;
+    for (s, bsp) in all.iter().zip(&built) {
+        let split = Bsp::build(
+            &s.scene,
+            &BspParams {
+                mixed_signs: false,
+                ..BspParams::default()
+            },
+        )?;
+        for kind in RayKind::ALL {
+            for &(wd, b) in widths.iter().filter(|(wd, _)| *wd > 1) {
+                let rays = rays(s, bsp, kind, w, h, wd);
+                let res = interleaved(2, samples, |i| {
+                    let a = if i == 0 { &split } else { &*bsp };
+                    pass_any(a, &rays, kind.occlusion(), b)
+                })?;
+                if let Some(why) = disagreement(&res[0].1, &res[1].1, rays.len()) {
+                    disagreements.push(format!(
+                        "{} {} rays at width {wd}: together against per sign group: {why}",
+                        s.name,
+                        kind.name()
+                    ));
+                }
+                let rate = |i: usize| rays.len() as f64 / res[i].0 / 1e6;
+                mixed.row(&[
+                    &s.name,
+                    &kind.name(),
+                    &wd,
+                    &b.map_or("scalar", |b| b.name()),
+                    &format!("{:.3}", rate(0)),
+                    &format!("{:.3}", rate(1)),
+                    &format!("{:.3}", rate(1) / rate(0)),
+                    &format!("{:.3}", sign_groups_per_packet(&rays, wd)),
+                ])?;
+            }
+        }
+        bar.inc(1);
+    }
+    mixed.finish()?;
+    if !disagreements.is_empty() {
+        anyhow::bail!(
+            "accel: the BSP's packets answer differently together and per sign group:\n  {}",
+            disagreements.join("\n  ")
+        );
+    }
     bar.finish_and_clear();
     plots(ctx)?;
     Ok(())
+}
+
+/// The average number of groups of equal direction signs in the packets of `width`
+/// consecutive rays (what a walk per sign group walks per packet).
+fn sign_groups_per_packet(rays: &[Ray1], width: usize) -> f64 {
+    let packets = rays.chunks(width);
+    let n = packets.len().max(1) as f64;
+    let groups: usize = packets
+        .map(|p| {
+            let mut seen = [false; 8];
+            for r in p {
+                let d = r.dir.to_array();
+                let k = (0..3).fold(0, |k, a| k | (usize::from(d[a].is_sign_negative()) << a));
+                seen[k] = true;
+            }
+            seen.iter().filter(|&&x| x).count()
+        })
+        .sum();
+    groups as f64 / n
 }
 
 /// The BSPs whose single rays test leaves four triangles at a time: on the default tree,
@@ -1014,6 +1092,16 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
             &["scene", "rays", "width", "threshold: Mrays/s", "best"],
             &rows,
         ));
+    }
+    if let Some(t) = ctx.read_csv("accel_mixed_signs.csv", MIXED_HEADER)? {
+        md.push_str(
+            "\nPackets whose lanes differ in direction signs (`accel_mixed_signs.csv`): the \
+             paper, after Wald et al., splits such a packet into groups of equal signs and walks \
+             the tree once per group; by default the BSP walks them together, each lane taking \
+             its own near child at every split (`BspParams::mixed_signs`). Mrays/s of both on \
+             the same rays, interleaved, and the groups of equal signs per packet.\n\n",
+        );
+        md.push_str(&t.to_markdown());
     }
     if let Some(tr) = read_either(ctx, "accel_traversal.csv", TRAVERSAL_HEADER)? {
         md.push_str(

@@ -11,6 +11,7 @@
 //! traversal counters.
 //! KT, KI, BONUS, LEAF, DEPTH, PRESET, GROUP (leaves priced per group) / TOPBINS, TOPKI,
 //! TOPLEAF: override build parameters. SIMD_LEAVES=1: single rays test leaves 4 at a time.
+//! MIXED=0: packets walk per group of equal direction signs (the paper's way).
 //! ```
 
 use coherent_accel::scenes::{self, BuiltinScene, SceneSize};
@@ -39,6 +40,7 @@ fn params(thr: Option<u32>) -> BspParams {
     o.max_depth = env("DEPTH").unwrap_or(o.max_depth);
     o.leaf_group = env("GROUP").unwrap_or(o.leaf_group);
     p.simd_leaves = env::<u32>("SIMD_LEAVES").is_some_and(|v| v == 1);
+    p.mixed_signs = env::<u32>("MIXED").is_none_or(|v| v == 1);
     let t = &mut p.top;
     t.bins = env("TOPBINS").unwrap_or(t.bins);
     t.intersection_cost = env("TOPKI").unwrap_or(t.intersection_cost);

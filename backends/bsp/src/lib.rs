@@ -9,7 +9,8 @@
 //! - 8-byte [`Node`]s with both children adjacent; triangles as projection-test records
 //!   ([`coherent_accel::TriAccel`]); degenerate triangles dropped and counted.
 //! - Traversal: single-ray (`walk1`) with a per-ray intersection cache, and packets (`walk`)
-//!   split by direction signs, near/far with a stack and masks, switching to single rays
+//!   near/far with a stack and masks (lanes of mixed direction signs together, or per sign
+//!   group as in the paper: [`BspParams::mixed_signs`]), switching to single rays
 //!   below a threshold of active lanes ([`BspParams::single_ray_threshold`]). Single rays
 //!   may test a leaf's triangles four at a time ([`BspParams::simd_leaves`], [`Leaves4`]),
 //!   on leaves priced per four triangles ([`SahParams::leaf_group`]).

@@ -154,6 +154,11 @@ pub struct BspParams {
     /// into blocks of four, see `leaf4.rs`). Off by default: the scalar baseline traces one
     /// triangle at a time, as the paper's non-SSE code did. Packets are unaffected.
     pub simd_leaves: bool,
+    /// Packets whose lanes differ in direction signs walk the tree as one packet, each lane
+    /// to the children its own segment reaches, instead of one walk per group of equal signs
+    /// (Wald et al. 2001, which the paper follows). The answers are the same; incoherent
+    /// packets (diffuse rays, shadow rays towards an environment) visit far fewer nodes.
+    pub mixed_signs: bool,
 }
 
 impl Default for BspParams {
@@ -164,6 +169,7 @@ impl Default for BspParams {
             mailbox: true,
             single_ray_threshold: None,
             simd_leaves: false,
+            mixed_signs: true,
         }
     }
 }

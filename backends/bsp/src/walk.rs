@@ -1,7 +1,9 @@
 //! Packet traversal of the two-level BSP, as in paper section 3 (after Wald et al. 2001):
-//! the packet is tested against the scene box, split into groups of equal direction signs,
-//! and walked near/far with an explicit stack; masks block lanes that do not enter a child or
-//! have finished; a node is skipped when every active lane's hit is nearer than it. When a
+//! the packet is tested against the scene box and walked near/far with an explicit stack;
+//! masks block lanes that do not enter a child or have finished. The paper (after Wald)
+//! splits a packet into groups of equal direction signs first; by default
+//! ([`crate::BspParams::mixed_signs`]) lanes of mixed signs walk together, each lane choosing
+//! its own near child; a node is skipped when every active lane's hit is nearer than it. When a
 //! subtree's active lanes fall to a threshold, its lanes continue ray by ray.
 
 use coherent_accel::triangle::xyzz_s;
@@ -34,20 +36,23 @@ pub(crate) struct RaysX<L: Lanes> {
     /// `1 / d` per lane and axis (infinite for zero components).
     pub inv: [L::F32s; 4],
     pub tmin: L::F32s,
-    /// Bit `k` set when the group's direction is negative along axis `k`.
-    pub signs: u32,
+    /// Per axis (`[x, y, z, z]`), the lanes whose direction is negative along it: for them
+    /// the near child of a split is the right one.
+    pub neg: [L::Mask; 4],
 }
 
 impl<L: Lanes> RaysX<L> {
     #[inline(always)]
     pub fn new(l: L, o: &Vec3s<L>, d: &Vec3s<L>, tmin: L::F32s) -> Self {
         let one = l.splat(1.0);
+        let zero = l.splat_i32(0);
+        let nz = d.z.to_bits().lt(zero);
         Self {
             o: xyzz_s(o),
             d: xyzz_s(d),
             inv: [one / d.x, one / d.y, one / d.z, one / d.z],
             tmin,
-            signs: 0,
+            neg: [d.x.to_bits().lt(zero), d.y.to_bits().lt(zero), nz, nz],
         }
     }
 
@@ -103,55 +108,53 @@ fn widen_hi<L: Lanes>(l: L, x: L::F32s) -> L::F32s {
     x + x.abs() * l.splat(SLACK)
 }
 
-/// Bitmasks of the lanes whose direction is negative along x, y, z.
-#[inline(always)]
-pub(crate) fn sign_bits<L: Lanes>(l: L, d: &Vec3s<L>) -> [u32; 3] {
-    // Written out, not `[..].map(closure)`: `array::map` and its closure are not always
-    // inlined, and code outside the kernel's `#[target_feature]` function calls every
-    // intrinsic out of line (`scripts/check-inlining.sh`).
-    let zero = l.splat_i32(0);
-    [
-        d.x.to_bits().lt(zero).bitmask(),
-        d.y.to_bits().lt(zero).bitmask(),
-        d.z.to_bits().lt(zero).bitmask(),
-    ]
-}
-
-/// Calls `f(group, signs)` for each group of the lanes `m` with equal direction signs.
+/// Calls `f(group)` for each group of the lanes `m` of `r` with equal direction signs, or
+/// once with all of `m` when `together` (see [`walk`]). `f` has one call site: every
+/// instantiation of the walk inlined into it is compiled once.
 #[inline(always)]
 pub(crate) fn sign_groups<L: Lanes>(
     l: L,
+    r: &RaysX<L>,
     m: L::Mask,
-    neg: [u32; 3],
-    mut f: impl FnMut(L::Mask, u32),
+    together: bool,
+    mut f: impl FnMut(L::Mask),
 ) {
     let all = m.bitmask();
+    let neg = [r.neg[0].bitmask(), r.neg[1].bitmask(), r.neg[2].bitmask()];
     let mut rest = all;
     while rest != 0 {
-        let i = rest.trailing_zeros();
-        let mut group = rest;
-        let mut signs = 0;
-        for (k, n) in neg.iter().enumerate() {
-            let bit = n >> i & 1;
-            signs |= bit << k;
-            // Lanes whose sign bit along k equals lane i's.
-            group &= !(n ^ 0u32.wrapping_sub(bit));
-        }
+        let group = if together {
+            rest
+        } else {
+            let i = rest.trailing_zeros();
+            let mut group = rest;
+            for n in neg {
+                // Lanes whose sign bit along this axis equals lane i's.
+                group &= !(n ^ 0u32.wrapping_sub(n >> i & 1));
+            }
+            group
+        };
         rest &= !group;
         let gm = if group == all {
             m
         } else {
             m & l.mask_from_bits(group)
         };
-        f(gm, signs);
+        f(gm);
     }
 }
 
 /// Walks `tree` from `start` with lanes `m` over per-lane segments `[tn, tf]`, front to
-/// back, calling `leaf(s, c, items, lanes)` at each leaf. Entries are skipped for lanes whose
-/// `limit(s)` is before them; the walk ends as soon as `done(s)` (every lane of the query
-/// finished: occlusion found for all). A subtree whose active lanes are at most `thr` goes to
-/// `single(s, c, node, lanes, tn, tf)` instead (`thr = 0` never switches).
+/// back, calling `leaf(s, c, items, lanes)` at each leaf. At each split every lane goes to
+/// the child or children its own segment reaches, its near child taken from its own direction
+/// sign (`r.neg`), and the packet takes first the child near for most of its lanes. The
+/// lanes of a packet of mixed signs may then meet their leaves out of order; the answers stay
+/// the same, since first hits only ever replace farther ones and entries beyond a lane's hit
+/// are still skipped. Entries are skipped for lanes whose `limit(s)` is before them; the walk
+/// ends as soon as `done(s)` (every lane of the query finished: occlusion found for all). A
+/// subtree whose active lanes are at most `thr` goes to `single(s, c, node, lanes, tn, tf)`
+/// instead (`thr = 0` never switches). One node step serves every packet: a packet of one
+/// sign group pays a few mask operations for it, and the walk is compiled once per query.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn walk<L: Lanes, S, C: Counters>(
@@ -194,27 +197,52 @@ pub(crate) fn walk<L: Lanes, S, C: Counters>(
                 c.inner();
                 let k = n.axis() & 3;
                 let ts = (l.splat(n.split()) - r.o[k]) * r.inv[k];
-                let neg = (r.signs >> k & 1) as usize;
-                let near = n.left() + neg;
-                let far = n.left() + 1 - neg;
                 // Lanes that reach the near child (not `ts < tn`) and the far child (not
-                // `ts > tf`); NaN lanes reach both.
+                // `ts > tf`); NaN lanes reach both. A lane's near child is the left one
+                // unless its direction is negative along `k`.
                 let go_near = m.and_not(ts.lt(tn));
                 let go_far = m.and_not(ts.gt(tf));
-                if go_far.none() {
-                    node = near;
-                } else if go_near.none() {
-                    node = far;
+                let negk = r.neg[k];
+                let flip = (go_near ^ go_far) & negk;
+                let (go_left, go_right) = (go_near ^ flip, go_far ^ flip);
+                let left = n.left();
+                if go_right.none() {
+                    node = left;
+                } else if go_left.none() {
+                    node = left + 1;
                 } else {
+                    // Both children: first the one near for most lanes; `minor`, the lanes
+                    // for which it is the far one (none when the lanes share their signs).
+                    let right_first = 2 * (negk & m).count() > m.count();
+                    let minor = if right_first {
+                        m.and_not(negk)
+                    } else {
+                        m & negk
+                    };
+                    let (go_first, go_second) = if right_first {
+                        (go_right, go_left)
+                    } else {
+                        (go_left, go_right)
+                    };
+                    let near_tf = widen_hi(l, ts.min(tf));
+                    let far_tn = widen_lo(l, ts.max(tn));
+                    let (first_seg, second_seg) = if minor.none() {
+                        ((tn, near_tf), (far_tn, tf))
+                    } else {
+                        (
+                            (minor.select(far_tn, tn), minor.select(tf, near_tf)),
+                            (minor.select(tn, far_tn), minor.select(near_tf, tf)),
+                        )
+                    };
                     stack.push(Entry {
-                        node: far as u32,
-                        tn: widen_lo(l, ts.max(tn)),
-                        tf,
-                        m: go_far,
+                        node: (left + 1 - right_first as usize) as u32,
+                        tn: second_seg.0,
+                        tf: second_seg.1,
+                        m: go_second,
                     });
-                    node = near;
-                    tf = widen_hi(l, ts.min(tf));
-                    m = go_near;
+                    node = left + right_first as usize;
+                    (tn, tf) = first_seg;
+                    m = go_first;
                     if m.count() <= thr {
                         c.handoff(m.count());
                         single(s, c, node, m, tn, tf);
@@ -320,7 +348,8 @@ pub(crate) fn mesh_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
 }
 
 /// Enters instance `i` with world-space lanes `m`: moves them into object space, clips them
-/// to the mesh box and walks the mesh, per sign group when the transform changed signs.
+/// to the mesh box and walks the mesh (per sign group unless [`crate::BspParams::mixed_signs`]:
+/// a transform may change signs).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn enter_instance<L: Lanes, Q: QueryP<L>, C: Counters>(
@@ -346,21 +375,20 @@ fn enter_instance<L: Lanes, Q: QueryP<L>, C: Counters>(
         return;
     }
     let obj = world.transformed(l, &inst.object_from_world);
-    let mut r = RaysX::new(l, &obj.origin, &obj.dir, wr.tmin);
+    let r = RaysX::new(l, &obj.origin, &obj.dir, wr.tmin);
     let (t0, t1) = clip_box(l, &mesh.tree.bounds, &r.o, &r.inv, wr.tmin, q.limit());
     let mm = m & t0.le(t1);
     if mm.none() {
         return;
     }
     c.instance(mm.count());
-    let neg = sign_bits(l, &obj.dir);
     sign_groups(
         l,
+        &r,
         mm,
-        neg,
+        bsp.params.mixed_signs,
         #[inline(always)]
-        |g, signs| {
-            r.signs = signs;
+        |g| {
             mesh_packet(l, mesh, i, &r, t0, t1, g, thr, bsp.params.mailbox, q, c);
         },
     );
@@ -380,21 +408,20 @@ pub(crate) fn scene_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
     if m.none() {
         return;
     }
-    let mut wr = RaysX::new(l, &rays.origin, &rays.dir, rays.tmin);
+    let wr = RaysX::new(l, &rays.origin, &rays.dir, rays.tmin);
     // The scene box first (or the object's, with a single top leaf): lanes that miss it are
     // done.
     let thr = bsp.params.threshold_for(L::N);
-    let neg = sign_bits(l, &rays.dir);
     let root = bsp.top.nodes[0];
     if root.is_leaf() {
         // Few instances: no top-level walk, each instance's box test culls.
         sign_groups(
             l,
+            &wr,
             m,
-            neg,
+            bsp.params.mixed_signs,
             #[inline(always)]
-            |g, signs| {
-                wr.signs = signs;
+            |g| {
                 for &i in &bsp.top.items[root.items()] {
                     enter_instance(l, bsp, i, rays, &wr, g, thr, q, c);
                     if q.done() {
@@ -412,11 +439,11 @@ pub(crate) fn scene_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
     }
     sign_groups(
         l,
+        &wr,
         m,
-        neg,
+        bsp.params.mixed_signs,
         #[inline(always)]
-        |g, signs| {
-            wr.signs = signs;
+        |g| {
             let mut seen = MailboxP::new();
             walk(
                 l,
