@@ -36,9 +36,16 @@ pub(crate) struct RaysX<L: Lanes> {
     /// `1 / d` per lane and axis (infinite for zero components).
     pub inv: [L::F32s; 4],
     pub tmin: L::F32s,
-    /// Per axis (`[x, y, z, z]`), the lanes whose direction is negative along it: for them
-    /// the near child of a split is the right one.
+    /// Per axis (`[x, y, z, z]`), the lanes whose direction is negative along it.
     pub neg: [L::Mask; 4],
+    /// Bit `k` set when most lanes of the group walked have a negative direction along axis
+    /// `k` (all of them, for a group of equal signs): the group's near child of a split on
+    /// `k` is then the right one.
+    pub signs: u32,
+    /// Bit `k` set when the group's lanes differ in direction sign along axis `k`; `minor[k]`
+    /// then holds the lanes against the majority, whose near child is the group's far one.
+    pub mixed: u32,
+    pub minor: [L::Mask; 4],
 }
 
 impl<L: Lanes> RaysX<L> {
@@ -53,6 +60,9 @@ impl<L: Lanes> RaysX<L> {
             inv: [one / d.x, one / d.y, one / d.z, one / d.z],
             tmin,
             neg: [d.x.to_bits().lt(zero), d.y.to_bits().lt(zero), nz, nz],
+            signs: 0,
+            mixed: 0,
+            minor: [l.splat_mask(false); 4],
         }
     }
 
@@ -108,16 +118,17 @@ fn widen_hi<L: Lanes>(l: L, x: L::F32s) -> L::F32s {
     x + x.abs() * l.splat(SLACK)
 }
 
-/// Calls `f(group)` for each group of the lanes `m` of `r` with equal direction signs, or
-/// once with all of `m` when `together` (see [`walk`]). `f` has one call site: every
-/// instantiation of the walk inlined into it is compiled once.
+/// Calls `f(group, r)` for each group of the lanes `m` of `r` with equal direction signs, or
+/// once with all of `m` when `together` (see [`walk`]), with `r`'s `signs`, `mixed` and
+/// `minor` set for the group. `f` has one call site: the walk inlined into it is compiled
+/// once.
 #[inline(always)]
 pub(crate) fn sign_groups<L: Lanes>(
     l: L,
-    r: &RaysX<L>,
+    r: &mut RaysX<L>,
     m: L::Mask,
     together: bool,
-    mut f: impl FnMut(L::Mask),
+    mut f: impl FnMut(L::Mask, &RaysX<L>),
 ) {
     let all = m.bitmask();
     let neg = [r.neg[0].bitmask(), r.neg[1].bitmask(), r.neg[2].bitmask()];
@@ -140,21 +151,40 @@ pub(crate) fn sign_groups<L: Lanes>(
         } else {
             m & l.mask_from_bits(group)
         };
-        f(gm);
+        // Signs and mixed axes from the bitmasks; the minority masks only where needed (a
+        // stale `minor[k]` is never read while bit `k` of `mixed` is clear).
+        let lanes = group.count_ones();
+        (r.signs, r.mixed) = (0, 0);
+        for (k, n) in neg.iter().enumerate() {
+            let negs = (n & group).count_ones();
+            let majority = 2 * negs > lanes;
+            r.signs |= u32::from(majority) << k;
+            if negs != 0 && negs != lanes {
+                r.mixed |= 1 << k;
+                r.minor[k] = if majority {
+                    gm.and_not(r.neg[k])
+                } else {
+                    gm & r.neg[k]
+                };
+            }
+        }
+        r.signs |= (r.signs >> 2 & 1) << 3;
+        r.mixed |= (r.mixed >> 2 & 1) << 3;
+        r.minor[3] = r.minor[2];
+        f(gm, r);
     }
 }
 
 /// Walks `tree` from `start` with lanes `m` over per-lane segments `[tn, tf]`, front to
 /// back, calling `leaf(s, c, items, lanes)` at each leaf. At each split every lane goes to
-/// the child or children its own segment reaches, its near child taken from its own direction
-/// sign (`r.neg`), and the packet takes first the child near for most of its lanes. The
-/// lanes of a packet of mixed signs may then meet their leaves out of order; the answers stay
-/// the same, since first hits only ever replace farther ones and entries beyond a lane's hit
-/// are still skipped. Entries are skipped for lanes whose `limit(s)` is before them; the walk
+/// the child or children its own segment reaches. The near child is the group's (`r.signs`);
+/// on an axis along which the lanes differ in sign (`r.mixed`), the minority's near child is
+/// the group's far one, so those lanes may meet their leaves out of order. The answers stay
+/// the same: first hits only ever replace farther ones, and entries beyond a lane's hit are
+/// still skipped. Entries are skipped for lanes whose `limit(s)` is before them; the walk
 /// ends as soon as `done(s)` (every lane of the query finished: occlusion found for all). A
 /// subtree whose active lanes are at most `thr` goes to `single(s, c, node, lanes, tn, tf)`
-/// instead (`thr = 0` never switches). One node step serves every packet: a packet of one
-/// sign group pays a few mask operations for it, and the walk is compiled once per query.
+/// instead (`thr = 0` never switches).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn walk<L: Lanes, S, C: Counters>(
@@ -197,52 +227,63 @@ pub(crate) fn walk<L: Lanes, S, C: Counters>(
                 c.inner();
                 let k = n.axis() & 3;
                 let ts = (l.splat(n.split()) - r.o[k]) * r.inv[k];
+                let sb = (r.signs >> k & 1) as usize;
+                let near = n.left() + sb;
+                let far = n.left() + 1 - sb;
                 // Lanes that reach the near child (not `ts < tn`) and the far child (not
-                // `ts > tf`); NaN lanes reach both. A lane's near child is the left one
-                // unless its direction is negative along `k`.
+                // `ts > tf`); NaN lanes reach both.
                 let go_near = m.and_not(ts.lt(tn));
                 let go_far = m.and_not(ts.gt(tf));
-                let negk = r.neg[k];
-                let flip = (go_near ^ go_far) & negk;
-                let (go_left, go_right) = (go_near ^ flip, go_far ^ flip);
-                let left = n.left();
-                if go_right.none() {
-                    node = left;
-                } else if go_left.none() {
-                    node = left + 1;
+                if r.mixed >> k & 1 != 0 {
+                    // Lanes of mixed signs along `k`: for the minority (`minor[k]`), the
+                    // group's near child is their far one. A step of its own, apart from the
+                    // one below, so that packets of equal signs pay only this test (a bit
+                    // that changes with the node's axis: the compiler does not copy the
+                    // whole walk for it, as it would for a per-packet flag).
+                    let mi = r.minor[k];
+                    let flip = (go_near ^ go_far) & mi;
+                    let (go_near, go_far) = (go_near ^ flip, go_far ^ flip);
+                    if go_far.none() {
+                        node = near;
+                    } else if go_near.none() {
+                        node = far;
+                    } else {
+                        let near_tf = widen_hi(l, ts.min(tf));
+                        let far_tn = widen_lo(l, ts.max(tn));
+                        stack.push(Entry {
+                            node: far as u32,
+                            tn: mi.select(tn, far_tn),
+                            tf: mi.select(near_tf, tf),
+                            m: go_far,
+                        });
+                        node = near;
+                        (tn, tf) = (mi.select(far_tn, tn), mi.select(tf, near_tf));
+                        m = go_near;
+                        if m.count() <= thr {
+                            c.handoff(m.count());
+                            single(s, c, node, m, tn, tf);
+                            if done(s) {
+                                return;
+                            }
+                            break;
+                        }
+                    }
+                    continue;
+                }
+                if go_far.none() {
+                    node = near;
+                } else if go_near.none() {
+                    node = far;
                 } else {
-                    // Both children: first the one near for most lanes; `minor`, the lanes
-                    // for which it is the far one (none when the lanes share their signs).
-                    let right_first = 2 * (negk & m).count() > m.count();
-                    let minor = if right_first {
-                        m.and_not(negk)
-                    } else {
-                        m & negk
-                    };
-                    let (go_first, go_second) = if right_first {
-                        (go_right, go_left)
-                    } else {
-                        (go_left, go_right)
-                    };
-                    let near_tf = widen_hi(l, ts.min(tf));
-                    let far_tn = widen_lo(l, ts.max(tn));
-                    let (first_seg, second_seg) = if minor.none() {
-                        ((tn, near_tf), (far_tn, tf))
-                    } else {
-                        (
-                            (minor.select(far_tn, tn), minor.select(tf, near_tf)),
-                            (minor.select(tn, far_tn), minor.select(near_tf, tf)),
-                        )
-                    };
                     stack.push(Entry {
-                        node: (left + 1 - right_first as usize) as u32,
-                        tn: second_seg.0,
-                        tf: second_seg.1,
-                        m: go_second,
+                        node: far as u32,
+                        tn: widen_lo(l, ts.max(tn)),
+                        tf,
+                        m: go_far,
                     });
-                    node = left + right_first as usize;
-                    (tn, tf) = first_seg;
-                    m = go_first;
+                    node = near;
+                    tf = widen_hi(l, ts.min(tf));
+                    m = go_near;
                     if m.count() <= thr {
                         c.handoff(m.count());
                         single(s, c, node, m, tn, tf);
@@ -375,7 +416,7 @@ fn enter_instance<L: Lanes, Q: QueryP<L>, C: Counters>(
         return;
     }
     let obj = world.transformed(l, &inst.object_from_world);
-    let r = RaysX::new(l, &obj.origin, &obj.dir, wr.tmin);
+    let mut r = RaysX::new(l, &obj.origin, &obj.dir, wr.tmin);
     let (t0, t1) = clip_box(l, &mesh.tree.bounds, &r.o, &r.inv, wr.tmin, q.limit());
     let mm = m & t0.le(t1);
     if mm.none() {
@@ -384,12 +425,12 @@ fn enter_instance<L: Lanes, Q: QueryP<L>, C: Counters>(
     c.instance(mm.count());
     sign_groups(
         l,
-        &r,
+        &mut r,
         mm,
         bsp.params.mixed_signs,
         #[inline(always)]
-        |g| {
-            mesh_packet(l, mesh, i, &r, t0, t1, g, thr, bsp.params.mailbox, q, c);
+        |g, r| {
+            mesh_packet(l, mesh, i, r, t0, t1, g, thr, bsp.params.mailbox, q, c);
         },
     );
 }
@@ -408,7 +449,7 @@ pub(crate) fn scene_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
     if m.none() {
         return;
     }
-    let wr = RaysX::new(l, &rays.origin, &rays.dir, rays.tmin);
+    let mut wr = RaysX::new(l, &rays.origin, &rays.dir, rays.tmin);
     // The scene box first (or the object's, with a single top leaf): lanes that miss it are
     // done.
     let thr = bsp.params.threshold_for(L::N);
@@ -417,13 +458,13 @@ pub(crate) fn scene_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
         // Few instances: no top-level walk, each instance's box test culls.
         sign_groups(
             l,
-            &wr,
+            &mut wr,
             m,
             bsp.params.mixed_signs,
             #[inline(always)]
-            |g| {
+            |g, wr| {
                 for &i in &bsp.top.items[root.items()] {
-                    enter_instance(l, bsp, i, rays, &wr, g, thr, q, c);
+                    enter_instance(l, bsp, i, rays, wr, g, thr, q, c);
                     if q.done() {
                         return;
                     }
@@ -439,16 +480,16 @@ pub(crate) fn scene_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
     }
     sign_groups(
         l,
-        &wr,
+        &mut wr,
         m,
         bsp.params.mixed_signs,
         #[inline(always)]
-        |g| {
+        |g, wr| {
             let mut seen = MailboxP::new();
             walk(
                 l,
                 &bsp.top,
-                &wr,
+                wr,
                 0,
                 t0,
                 t1,
@@ -476,7 +517,7 @@ pub(crate) fn scene_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
                         } else {
                             m & l.mask_from_bits(new)
                         };
-                        enter_instance(l, bsp, i, rays, &wr, mm, thr, q, c);
+                        enter_instance(l, bsp, i, rays, wr, mm, thr, q, c);
                     }
                 },
                 #[inline(always)]
