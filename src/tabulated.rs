@@ -8,7 +8,8 @@
 //! search probe at most 1, 2 and 4 distinct nodes: those are kept in registers and picked
 //! with selects on the earlier steps' outcomes, so only the later steps gather (for the
 //! paper's 17 x 7 x 17 x 13 table: 1 gather in all four searches instead of 11; see
-//! `table1` in `reproduce` for what it is worth).
+//! `table1` in `reproduce` for what it is worth). Packets of 16 pick the fourth level's
+//! 8 candidates with selects too, so that table needs no gather there at all.
 //!
 //! Values are kept one plane per channel, so that the gathers of a corner's channels share
 //! their index (and, on backends without a hardware gather, its range check).
@@ -80,6 +81,23 @@ pub struct Axis {
     node_invs: Vec<f32>,
     /// The sequence of step sizes of the fixed-length binary search.
     halves: Vec<i32>,
+}
+
+/// `table[at[0]]` where both masks are on, `at[1]` where only `first`, `at[2]` where only
+/// `second`, `at[3]` where neither: one of four splatted values per lane by two levels of
+/// selects (a plain function, not a closure, so that it inlines into every kernel).
+#[inline(always)]
+fn pick4<L: Lanes>(l: L, first: L::Mask, second: L::Mask, table: &[f32], at: [i32; 4]) -> L::F32s {
+    first.select(
+        second.select(
+            l.splat(table[at[0] as usize]),
+            l.splat(table[at[1] as usize]),
+        ),
+        second.select(
+            l.splat(table[at[2] as usize]),
+            l.splat(table[at[3] as usize]),
+        ),
+    )
 }
 
 impl Axis {
@@ -223,14 +241,48 @@ impl Axis {
                     hit1.select(w(h[0] + h[1] + h[2]), w(h[0] + h[2])),
                     hit1.select(w(h[1] + h[2]), w(h[2])),
                 );
+                // 16-lane packets: level 4 by selects too. Its eight candidates are picked
+                // by the first two outcomes for either third one before level 3's outcome
+                // is known, so only the last select waits for it (a gather waits for it and
+                // then for memory). Measured (`kernels`, BDF, Zen 4): pulp16, whose gathers
+                // go lane by lane, 7.3x -> 8.0-8.4x over scalar; avx512 (a two-register
+                // permute) unchanged; at 8 lanes avx2 +2% and pulp8 -3%, so they gather.
+                let four = if L::N >= 16 && h.len() > 3 {
+                    let h3 = h[3];
+                    // The candidates for either third outcome (`up`: moved by `h[2]`).
+                    let [h0, h1, h2] = [h[0], h[1], h[2]];
+                    let up = [h0 + h1 + h2 + h3, h0 + h2 + h3, h1 + h2 + h3, h2 + h3];
+                    let down = [h0 + h1 + h3, h0 + h3, h1 + h3, h3];
+                    let nodes = (
+                        pick4(l, hit0, hit1, &self.nodes, up),
+                        pick4(l, hit0, hit1, &self.nodes, down),
+                    );
+                    let widths = (
+                        pick4(l, hit0, hit1, &self.inv_widths, up),
+                        pick4(l, hit0, hit1, &self.inv_widths, down),
+                    );
+                    Some((h3, nodes, widths))
+                } else {
+                    None
+                };
                 let hit2 = probe.le(x);
                 base = hit2.select_i32(base + l.splat_i32(h[2]), base);
                 lower = hit2.select(probe, lower);
                 inv = hit2.select(probe_inv, inv);
+                let mut rest = &h[3..];
+                if let Some((h3, (n_up, n_down), (w_up, w_down))) = four {
+                    let probe = hit2.select(n_up, n_down);
+                    let probe_inv = hit2.select(w_up, w_down);
+                    let hit3 = probe.le(x);
+                    base = hit3.select_i32(base + l.splat_i32(h3), base);
+                    lower = hit3.select(probe, lower);
+                    inv = hit3.select(probe_inv, inv);
+                    rest = &h[4..];
+                }
                 // Further levels gather the probed node and its width per lane, one
                 // 64-bit gather for both (axes are short: backends with slow gathers may
                 // read the whole axis into registers instead).
-                for &half in &h[3..] {
+                for &half in rest {
                     let probe = base + l.splat_i32(half);
                     let (node, node_inv) = l.gather2_near(&self.node_invs, probe + probe);
                     let hit = node.le(x);
