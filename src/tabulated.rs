@@ -245,7 +245,7 @@ impl Axis {
                 // by the first two outcomes for either third one before level 3's outcome
                 // is known, so only the last select waits for it (a gather waits for it and
                 // then for memory). Measured (`kernels`, BDF, Zen 4): pulp16, whose gathers
-                // go lane by lane, 7.3x -> 8.0-8.4x over scalar; avx512 (a two-register
+                // go lane by lane, 7.3x -> 7.7-8.4x over scalar; avx512 (a two-register
                 // permute) unchanged; at 8 lanes avx2 +2% and pulp8 -3%, so they gather.
                 let four = if L::N >= 16 && h.len() > 3 {
                     let h3 = h[3];
