@@ -165,6 +165,12 @@ fn run(
                     start.elapsed().as_secs_f64()
                 );
                 ran.push(experiment.name.to_owned());
+                // Which revision wrote this experiment's results (`runs` in machine.json).
+                let json = std::fs::read_to_string(&machine_json)
+                    .with_context(|| format!("cannot read {}", machine_json.display()))?;
+                let json = crate::machine_keys::record_run(&json, experiment.name, &ctx.machine);
+                std::fs::write(&machine_json, json)
+                    .with_context(|| format!("cannot write {}", machine_json.display()))?;
             }
             Err(e) => {
                 eprintln!("reproduce: experiment {} failed: {e:#}", experiment.name);

@@ -103,6 +103,9 @@ fn machine_section(ctx: &Ctx, problems: &mut Vec<String>) -> String {
     let machine = std::fs::read_to_string(&path)
         .map_err(|e| e.to_string())
         .and_then(|text| Machine::from_json(&text).map_err(|e| e.to_string()));
+    let runs = std::fs::read_to_string(&path)
+        .map(|text| crate::machine_keys::runs(&text))
+        .unwrap_or_default();
     let m = match machine {
         Ok(m) => m,
         Err(e) => {
@@ -152,10 +155,22 @@ fn machine_section(ctx: &Ctx, problems: &mut Vec<String>) -> String {
         vec!["date".to_owned(), m.date.clone()],
         vec!["os".to_owned(), m.os.clone()],
     ];
-    format!(
+    let mut md = format!(
         "From [`machine.json`](machine.json), written by the last run.\n\n{}\n",
         markdown_table(&["key", "value"], &rows)
-    )
+    );
+    if !runs.is_empty() {
+        let rows: Vec<Vec<String>> = runs
+            .into_iter()
+            .map(|(name, rev, date)| vec![format!("`{name}`"), rev, date])
+            .collect();
+        md.push_str(&format!(
+            "The run that wrote each experiment's results here (`runs` in `machine.json`; \
+             sections of experiments not listed come from runs before this record was kept):\n\n{}\n",
+            markdown_table(&["experiment", "git_rev", "date"], &rows)
+        ));
+    }
+    md
 }
 
 /// The table of contents: paper item -> experiment -> command -> CSV -> plots.
