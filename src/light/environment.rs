@@ -7,6 +7,15 @@
 //! ([`Environment::radiance`], nearest texel, the same piecewise-constant map the sampling
 //! assumes).
 //!
+//! The samples are stratified: the unit square of random numbers is cut into a grid of as
+//! many cells as samples ([`strata_grid`]), and sample `k` of every shading point is drawn
+//! in cell `k` (its own numbers place it inside the cell). Each cell has the same
+//! probability, so the estimate stays unbiased and its variance can only fall. The reason
+//! it is done here is coherence, the paper's theme: the importance warp is monotone in
+//! both numbers, so sample `k` of every lane of a packet lands in the same part of the
+//! map, and the packet's shadow rays leave in similar directions instead of over the whole
+//! sphere (as the paper's surface lights share their fixed points, section 3).
+//!
 //! Map layout: column `i` of `w` covers azimuth `phi` in `[2 pi i / w, 2 pi (i + 1) / w)`,
 //! row `j` of `h` covers `theta` (from the up axis) in `[pi j / h, pi (j + 1) / h)`; the
 //! direction of `(theta, phi)` is `sin(theta) (cos(phi) x + sin(phi) y) + cos(theta) up`,
@@ -54,8 +63,23 @@ pub struct Environment {
     axes: [Vec3; 3],
     scale: f32,
     samples: u32,
+    /// The strata grid of the samples: cells along the column number and the row number.
+    strata: [u32; 2],
     /// Negative channels set to zero when loaded.
     clamped: usize,
+}
+
+/// The grid of `samples` strata over the unit square of random numbers: `[columns, rows]`,
+/// as square as `samples` allows, with at least as many rows (cells along the number that
+/// picks the map's row) as columns. A prime count is stratified along rows only.
+pub fn strata_grid(samples: u32) -> [u32; 2] {
+    let samples = samples.max(1);
+    let columns = (1..=samples)
+        .take_while(|d| d * d <= samples)
+        .filter(|d| samples % d == 0)
+        .last()
+        .unwrap_or(1);
+    [columns, samples / columns]
 }
 
 /// The search step sizes for `n` cells.
@@ -197,6 +221,7 @@ impl Environment {
             axes: [ex, ey, ez],
             scale,
             samples,
+            strata: strata_grid(samples),
             clamped: 0,
         })
     }
@@ -266,6 +291,7 @@ impl Environment {
     /// The same map with another sample count (at least 1).
     pub fn with_samples(mut self, samples: u32) -> Self {
         self.samples = samples.max(1);
+        self.strata = strata_grid(self.samples);
         self
     }
 
@@ -325,7 +351,8 @@ impl Environment {
         m.pdf[t] / (2.0 * std::f32::consts::PI * std::f32::consts::PI * sin_dir)
     }
 
-    /// One importance-drawn direction per lane from `u`, weighted for [`Self::samples`]
+    /// Sample `k` per lane: an importance-drawn direction in stratum `k` (of
+    /// [`Self::samples`]), placed in the stratum by `u`, weighted for [`Self::samples`]
     /// samples.
     #[inline(always)]
     pub fn sample<L: Lanes>(
@@ -334,13 +361,19 @@ impl Environment {
         _p: &Vec3s<L>,
         n: &Vec3s<L>,
         active: L::Mask,
+        k: u32,
         u: [L::F32s; 2],
     ) -> LightSample<L> {
         let m = &*self.map;
         let (w, h) = (m.width, m.height);
         let zero = l.splat(0.0);
         let below_one = l.splat(1.0f32.next_down());
-        let (u0, u1) = (u[0].clamp(zero, below_one), u[1].clamp(zero, below_one));
+        let [gx, gy] = self.strata;
+        let (kx, ky) = ((k % gx) as f32, ((k / gx) % gy) as f32);
+        let (sx, sy) = (1.0 / gx as f32, 1.0 / gy as f32);
+        let u0 = (u[0].clamp(zero, below_one) + kx) * sx;
+        let u1 = (u[1].clamp(zero, below_one) + ky) * sy;
+        let (u0, u1) = (u0.min(below_one), u1.min(below_one));
         // Row from the marginal CDF, then the column from that row's conditional CDF; the
         // position inside the texel is the remainder of the number, rescaled.
         let j = Self::search(l, &m.marginal, l.splat_i32(0), &m.row_halves, u1);
@@ -503,6 +536,7 @@ mod tests {
                 &Vec3s::splat(l, Vec3::ZERO),
                 &Vec3s::splat(l, Vec3::Z),
                 l.splat_mask(true),
+                k,
                 [u[0], u[1]],
             );
             let d = s.wi.lane(0);
@@ -522,6 +556,77 @@ mod tests {
         }
         // The spot is 6 of 512 texels but holds most of the weight.
         assert!(bright > 500, "{bright} of 1000 samples in the bright spot");
+    }
+
+    #[test]
+    fn strata_grids_are_as_square_as_the_count_allows() {
+        assert_eq!(strata_grid(16), [4, 4]);
+        assert_eq!(strata_grid(8), [2, 4]);
+        assert_eq!(strata_grid(12), [3, 4]);
+        assert_eq!(strata_grid(7), [1, 7]);
+        assert_eq!(strata_grid(1), [1, 1]);
+        assert_eq!(strata_grid(0), [1, 1]);
+    }
+
+    /// Sample `k` of any shading point falls in stratum `k`: the map's cumulative tables,
+    /// read at the drawn direction, give back numbers inside the stratum's cell.
+    #[test]
+    fn sample_k_is_drawn_in_stratum_k_whatever_its_numbers() {
+        for samples in [16u32, 8, 7] {
+            let env = varied().with_samples(samples);
+            let m = &*env.map;
+            let [gx, gy] = strata_grid(samples);
+            let l = coherent_simd::scalar::Scalar;
+            let mut rng = 0x2545_f491u32;
+            let mut next = || {
+                rng ^= rng << 13;
+                rng ^= rng >> 17;
+                rng ^= rng << 5;
+                (rng >> 8) as f32 / (1u32 << 24) as f32
+            };
+            for k in 0..samples {
+                for _ in 0..200 {
+                    let u = [next(), next()];
+                    // Directions below the normal are inactive: draw with both normals.
+                    let d = [Vec3::Z, -Vec3::Z]
+                        .into_iter()
+                        .map(|n| {
+                            env.sample(
+                                l,
+                                &Vec3s::splat(l, Vec3::ZERO),
+                                &Vec3s::splat(l, n),
+                                l.splat_mask(true),
+                                k,
+                                u,
+                            )
+                        })
+                        .find(|s| s.active.lane(0))
+                        .map(|s| s.wi.lane(0));
+                    let Some(d) = d else { continue };
+                    let theta = d.z.clamp(-1.0, 1.0).acos();
+                    let phi = d.y.atan2(d.x).rem_euclid(std::f32::consts::TAU);
+                    let v = (theta / std::f32::consts::PI * m.height as f32)
+                        .clamp(0.0, m.height as f32 - 1e-3);
+                    let (j, fv) = (v as usize, v.fract());
+                    let cu1 = m.marginal[j] + fv * (m.marginal[j + 1] - m.marginal[j]);
+                    let x = (phi / std::f32::consts::TAU * m.width as f32)
+                        .clamp(0.0, m.width as f32 - 1e-3);
+                    let (i, fu) = (x as usize, x.fract());
+                    let row = &m.conditional[j * (m.width + 1)..];
+                    let cu0 = row[i] + fu * (row[i + 1] - row[i]);
+                    let (kx, ky) = ((k % gx) as f32, (k / gx) as f32);
+                    let tol = 2e-3;
+                    assert!(
+                        cu1 >= ky / gy as f32 - tol && cu1 <= (ky + 1.0) / gy as f32 + tol,
+                        "{samples} samples, k {k}, u {u:?}: row number {cu1}"
+                    );
+                    assert!(
+                        cu0 >= kx / gx as f32 - tol && cu0 <= (kx + 1.0) / gx as f32 + tol,
+                        "{samples} samples, k {k}, u {u:?}: column number {cu0}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

@@ -314,7 +314,8 @@ impl Light {
     /// Sample `k` (in `0..samples()`) of this light for the shading points `p` with unit
     /// normals `n`, on the lanes of `active`. `u` are per-lane uniform numbers in `[0, 1)`:
     /// surface lights jitter stratum `k` with them (when built to), the environment
-    /// importance-samples with them; point lights ignore them.
+    /// importance-samples with them inside stratum `k` of its grid; point lights ignore
+    /// them.
     #[inline(always)]
     pub fn sample<L: Lanes>(
         &self,
@@ -334,7 +335,7 @@ impl Light {
             Light::Circular(x) => x.sample(l, p, n, active, k, u),
             Light::Rectangular(x) => x.sample(l, p, n, active, k, u),
             Light::Goniodiagram(x) => x.sample(l, p, n, active),
-            Light::Environment(x) => x.sample(l, p, n, active, u),
+            Light::Environment(x) => x.sample(l, p, n, active, k, u),
         }
     }
 
