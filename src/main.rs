@@ -104,6 +104,11 @@ struct RenderArgs {
     /// are compacted into full packets (the same image up to rounding; fewer, fuller packets).
     #[arg(long)]
     regroup: bool,
+    /// Time each stage of the packet pipeline (traversal, shadows, lights, shading, other)
+    /// and print the split. The clock is read around every stage of every packet, which
+    /// slows the frame; the split is for comparing stages, not for frame times.
+    #[arg(long)]
+    stages: bool,
     /// Output image: .exr (HDR radiance) or .png (tone-mapped).
     #[arg(long, short)]
     out: std::path::PathBuf,

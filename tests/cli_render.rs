@@ -70,6 +70,42 @@ fn a_built_in_scene_renders_to_png_and_exr_with_a_summary() {
 }
 
 #[test]
+fn stages_prints_the_time_of_each_pipeline_stage() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cornell.exr");
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "render",
+            "cornell",
+            "--resolution",
+            "32x24",
+            "--spp",
+            "1",
+            "--threads",
+            "1",
+            "--quiet",
+            "--out",
+            path.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let out = coherent(&args);
+        assert!(out.status.success(), "{}", text(&out));
+        text(&out)
+    };
+    let timed = run(&["--stages"]);
+    let line = timed
+        .lines()
+        .find(|l| l.starts_with("time by stage"))
+        .unwrap_or_else(|| panic!("no stage line:\n{timed}"));
+    for stage in ["traversal", "shadows", "shading", "lights", "other"] {
+        assert!(line.contains(stage), "{stage} missing from: {line}");
+    }
+    // The traversal of the camera rays alone takes some time on any machine.
+    assert!(!line.contains("traversal 0.000 s (0.0%)"), "{line}");
+    assert!(!run(&[]).contains("time by stage"));
+}
+
+#[test]
 fn bad_input_fails_with_a_message() {
     let dir = tempfile::tempdir().unwrap();
     let png = dir.path().join("x.png");

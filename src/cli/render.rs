@@ -81,6 +81,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let mut renderer = Renderer::new(&scene, accel, w, h).context("the scene's camera")?;
     renderer.light_samples = args.light_samples;
     renderer.regroup = args.regroup;
+    renderer.time_stages = args.stages;
 
     let threads = args.threads.unwrap_or_else(|| {
         std::thread::available_parallelism()
@@ -165,6 +166,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         (t_build - t_load).as_secs_f64(),
         args.out.display(),
     );
+    if args.stages {
+        println!("time by stage (clock read per stage): {}", st.stage_summary());
+    }
     if st.nan > 0 {
         eprintln!(
             "coherent: warning: {} radiance samples were NaN (a bad material or light?); they were \

@@ -193,6 +193,25 @@ impl RenderStats {
         depth.join(", ")
     }
 
+    /// The time of each timed stage, summed over threads, and its share, as
+    /// `traversal 0.120 s (10.0%), ...` (all zero unless the renderer timed its stages).
+    pub fn stage_summary(&self) -> String {
+        let total: u64 = self.stage_ns.iter().sum();
+        Stage::ALL
+            .iter()
+            .map(|s| {
+                let ns = self.stage_ns[*s as usize];
+                format!(
+                    "{} {:.3} s ({:.1}%)",
+                    s.name(),
+                    ns as f64 * 1e-9,
+                    100.0 * ns as f64 / total.max(1) as f64
+                )
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
     /// One line: rays by kind, average active lanes per packet per stage, material passes
     /// per packet, NaN samples.
     pub fn summary(&self) -> String {
