@@ -167,7 +167,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         args.out.display(),
     );
     if args.stages {
-        println!("time by stage (clock read per stage): {}", st.stage_summary());
+        println!(
+            "time by stage (clock read per stage): {}",
+            st.stage_summary()
+        );
     }
     if st.nan > 0 {
         eprintln!(
