@@ -76,7 +76,7 @@ pub fn strata_grid(samples: u32) -> [u32; 2] {
     let samples = samples.max(1);
     let columns = (1..=samples)
         .take_while(|d| d * d <= samples)
-        .filter(|d| samples % d == 0)
+        .filter(|d| samples.is_multiple_of(*d))
         .last()
         .unwrap_or(1);
     [columns, samples / columns]
