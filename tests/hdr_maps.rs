@@ -11,6 +11,17 @@ use coherent::simd::scalar::Scalar;
 use coherent::simd::{Lanes, SimdMask, Vec3s};
 use glam::Vec3;
 
+/// A uniform number in [0, 1) from a counter (SplitMix64's finaliser).
+fn uniform(i: u32) -> f32 {
+    let mut z = (i as u64)
+        .wrapping_add(1)
+        .wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^= z >> 31;
+    (z >> 40) as f32 / (1u64 << 24) as f32
+}
+
 /// Irradiance on a surface facing `n` by summing every texel: `sum L cos(theta_n) dw`.
 fn brute_force(env: &Environment, n: Vec3) -> f64 {
     let (w, h) = env.size();
@@ -80,11 +91,10 @@ fn blender_world_maps_load_and_their_sampled_irradiance_matches_the_texel_sum() 
             let l = Scalar;
             let mut got = 0.0f64;
             for k in 0..samples {
-                // A (0, 2) sequence: van der Corput in base 2 and k / samples.
-                let u = [
-                    l.splat((k.reverse_bits() as f64 / 4294967296.0) as f32),
-                    l.splat((k as f32 + 0.5) / samples as f32),
-                ];
+                // The light puts sample k in cell k of its strata grid; the numbers only
+                // place it inside the cell, so they are plain pseudo-random ones, as the
+                // renderer's are.
+                let u = [l.splat(uniform(2 * k)), l.splat(uniform(2 * k + 1))];
                 let s = light.sample(
                     l,
                     &Vec3s::splat(l, Vec3::ZERO),
