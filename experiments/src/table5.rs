@@ -4,8 +4,10 @@
 //! Protocol: the scenes and frames of `table3` (the same plan: quick mode renders the small
 //! scenes at 160 x 120), the BSP, the widest backend of this CPU and the scalar one; the
 //! threads are a rayon pool installed around the render, as `coherent render --threads T`
-//! does. Per scene and backend, every thread count renders once untimed, then 3 rounds visit
-//! every thread count in turn; `seconds` is the median.
+//! does. Per scene and backend, every thread count renders once untimed, then rounds visit
+//! every thread count in turn; `seconds` is the median. There are 3 rounds, or as many as make
+//! the 1-thread frames add up to [`TIMED_SECONDS`] (at most [`MAX_ROUNDS`]): a 0.1 s frame
+//! varies by more, relative to its length, than a 2 s one, and 2 threads' speedup is read off it.
 
 use std::collections::BTreeMap;
 use std::fmt::Display;
@@ -30,6 +32,18 @@ pub const EXPERIMENT: Experiment = Experiment {
 };
 
 const FILE: &str = "table5_threads.csv";
+/// Short frames get more rounds, until the 1-thread frames add up to this many seconds.
+const TIMED_SECONDS: f64 = 2.0;
+/// The fewest rounds.
+const MIN_ROUNDS: usize = 3;
+/// The most rounds.
+const MAX_ROUNDS: usize = 15;
+
+/// Rounds for a frame whose untimed 1-thread render took `seconds`.
+fn rounds_for(seconds: f64) -> usize {
+    let n = (TIMED_SECONDS / seconds.max(1e-6)).ceil();
+    (n.min(MAX_ROUNDS as f64) as usize).max(MIN_ROUNDS)
+}
 /// The folder, beside these results, of a run on a machine with more cores.
 const MANYCORE: &str = "manycore";
 /// The contract's columns, then the lanes of the backend.
@@ -86,7 +100,6 @@ pub fn run_plan(
     backends: &[Backend],
     threads: &[usize],
 ) -> anyhow::Result<()> {
-    let rounds = 3;
     let pools = threads
         .iter()
         .map(|&t| frames::pool(t))
@@ -103,10 +116,11 @@ pub fn run_plan(
         let r = frames::renderer(&scene, AccelKind::Bsp)?;
         for &b in backends {
             let mut seconds: BTreeMap<usize, Vec<f64>> = BTreeMap::new();
+            let mut warm = Vec::with_capacity(pools.len());
             for pool in &pools {
-                frames::frame(pool, b, &r, plan)?; // warm-up
+                warm.push(frames::frame(pool, b, &r, plan)?.1); // untimed
             }
-            for _ in 0..rounds {
+            for _ in 0..rounds_for(warm[0]) {
                 for (i, pool) in pools.iter().enumerate() {
                     let (_, s) = frames::frame(pool, b, &r, plan)?;
                     seconds.entry(i).or_default().push(s);
@@ -179,11 +193,13 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     let Some(t) = ctx.read_csv(FILE, HEADER)? else {
         return Ok(None);
     };
-    let mut md = String::from(
+    let mut md = format!(
         "The frames of `table3` (same scenes, size and samples; BSP) on a rayon pool of 1, 2, \
          4, ... and every core of the machine (`machine.json`), with the widest backend of this CPU \
-         and the scalar one; every thread count renders once untimed, then 3 rounds visit \
-         them in turn and `seconds` is the median; `speedup` = 1-thread seconds / this row's. \
+         and the scalar one; every thread count renders once untimed, then rounds visit \
+         them in turn and `seconds` is the median ({MIN_ROUNDS} rounds, more for short frames: \
+         as many as make the 1-thread frames add up to {TIMED_SECONDS} s, at most {MAX_ROUNDS}); \
+         `speedup` = 1-thread seconds / this row's. \
          On a machine shared with other work, the speedup reads low.\n\n",
     );
     let find = |s: &str, b: &str, n: &str| -> anyhow::Result<Option<usize>> {
@@ -320,6 +336,15 @@ fn manycore_report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn short_frames_get_more_rounds() {
+        assert_eq!(rounds_for(2.5), 3);
+        assert_eq!(rounds_for(0.5), 4);
+        assert_eq!(rounds_for(0.09), 15);
+        assert_eq!(rounds_for(0.2), 10);
+        assert_eq!(rounds_for(0.0), 15);
+    }
 
     #[test]
     fn thread_counts_are_deduplicated() {
