@@ -168,7 +168,9 @@ fn run(
                 // Which revision wrote this experiment's results (`runs` in machine.json).
                 let json = std::fs::read_to_string(&machine_json)
                     .with_context(|| format!("cannot read {}", machine_json.display()))?;
-                let json = crate::machine_keys::record_run(&json, experiment.name, &ctx.machine);
+                let probe = crate::machine_keys::speed_probe_ms();
+                let json =
+                    crate::machine_keys::record_run(&json, experiment.name, &ctx.machine, probe);
                 std::fs::write(&machine_json, json)
                     .with_context(|| format!("cannot write {}", machine_json.display()))?;
             }

@@ -9,10 +9,55 @@
 //! `accel` runs again, and its report reads which Embree it timed from that key.
 //!
 //! Likewise `runs`: per experiment whose results are in the folder, the source revision
-//! (`git_rev`) and the date of the run that wrote them. `--only` runs replace some sections
-//! and keep the others, so the machine's own `git_rev` names only the last run.
+//! (`git_rev`), the date, the `os` line (its kernel build tells hosts apart) and a speed probe
+//! (`probe_ms`) of the run that wrote them. `--only` runs replace some sections and keep the
+//! others, so the machine's own `git_rev` names only the last run. Hosts that report the same
+//! CPU model differ in speed (this workplace's hosts by up to 1.5x in frame time), so the probe
+//! says whether two experiments' absolute times can be compared.
+
+use std::time::Instant;
 
 use coherent::machine::Machine;
+
+/// Steps of the speed probe's loop: some 25 ms on a 2.6 GHz Zen 4.
+const PROBE_STEPS: u64 = 10_000_000;
+
+/// Milliseconds of a fixed single-thread scalar loop (a dependent chain of `f64` multiplies and
+/// adds beside an integer hash: latency-bound, nothing for the vectoriser, no memory), the
+/// median of 5. It follows the core's clock and any other load on it, which is what makes one
+/// host's frame times differ from another's of the same CPU model.
+pub fn speed_probe_ms() -> f64 {
+    let mut times: Vec<f64> = (0..5)
+        .map(|_| {
+            let start = Instant::now();
+            let mut x = std::hint::black_box(1.0f64);
+            let mut h = std::hint::black_box(0x9e37_79b9u64);
+            for _ in 0..std::hint::black_box(PROBE_STEPS) {
+                x = x * 0.999_999 + 1e-7;
+                h = h.rotate_left(5) ^ h.wrapping_mul(31);
+            }
+            std::hint::black_box((x, h));
+            start.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    times.sort_by(f64::total_cmp);
+    times[times.len() / 2]
+}
+
+/// One entry of `runs`: the run that wrote an experiment's results.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunRecord {
+    /// The experiment.
+    pub experiment: String,
+    /// `git_rev` of the run.
+    pub git_rev: String,
+    /// Its date (UTC, ISO-8601).
+    pub date: String,
+    /// Its host's `os` line; `None` in entries written before it was recorded.
+    pub os: Option<String>,
+    /// [`speed_probe_ms`] on its host; `None` in entries written before it was recorded.
+    pub probe_ms: Option<f64>,
+}
 
 /// `build`'s value for this machine's build, as JSON text.
 pub fn build_value(machine: &Machine) -> &'static str {
@@ -68,21 +113,26 @@ pub fn machine_json(machine: &Machine, previous: Option<&str>) -> String {
     json
 }
 
-/// `json` with `experiment`'s entry of `runs` set to `machine`'s revision and date (the run
-/// that has just written that experiment's results).
-pub fn record_run(json: &str, experiment: &str, machine: &Machine) -> String {
+/// `json` with `experiment`'s entry of `runs` set to `machine`'s revision, date and `os` and
+/// to `probe_ms` ([`speed_probe_ms`]): the run that has just written that experiment's results.
+pub fn record_run(json: &str, experiment: &str, machine: &Machine, probe_ms: f64) -> String {
     let mut runs: serde_json::Map<String, serde_json::Value> = get_key(json, "runs")
         .and_then(|v| serde_json::from_str(&v).ok())
         .unwrap_or_default();
     runs.insert(
         experiment.to_owned(),
-        serde_json::json!({ "git_rev": machine.git_rev, "date": machine.date }),
+        serde_json::json!({
+            "git_rev": machine.git_rev,
+            "date": machine.date,
+            "os": machine.os,
+            "probe_ms": (probe_ms * 100.0).round() / 100.0,
+        }),
     );
     set_key(json, "runs", &serde_json::Value::Object(runs).to_string())
 }
 
-/// `runs` of `json` as `(experiment, git_rev, date)`, by experiment name; empty without it.
-pub fn runs(json: &str) -> Vec<(String, String, String)> {
+/// `runs` of `json`, by experiment name; empty without it.
+pub fn runs(json: &str) -> Vec<RunRecord> {
     let Some(value) = get_key(json, "runs") else {
         return Vec::new();
     };
@@ -91,7 +141,13 @@ pub fn runs(json: &str) -> Vec<(String, String, String)> {
     };
     let text = |v: &serde_json::Value, k: &str| v[k].as_str().unwrap_or("?").to_owned();
     runs.iter()
-        .map(|(name, v)| (name.clone(), text(v, "git_rev"), text(v, "date")))
+        .map(|(name, v)| RunRecord {
+            experiment: name.clone(),
+            git_rev: text(v, "git_rev"),
+            date: text(v, "date"),
+            os: v["os"].as_str().map(str::to_owned),
+            probe_ms: v["probe_ms"].as_f64(),
+        })
         .collect()
 }
 
@@ -140,25 +196,56 @@ mod tests {
         let mut machine = Machine::detect();
         machine.git_rev = "aaa".into();
         machine.date = "d1".into();
-        let json = record_run(&machine_json(&machine, None), "kernels", &machine);
-        let json = record_run(&json, "table1", &machine);
-        // A later run on the same CPU, of one experiment only.
+        machine.os = "host a".into();
+        let json = record_run(&machine_json(&machine, None), "kernels", &machine, 25.0);
+        let json = record_run(&json, "table1", &machine, 25.0);
+        // A later run on the same CPU, of one experiment only, on a slower host.
         let mut later = machine.clone();
         later.git_rev = "bbb".into();
         later.date = "d2".into();
-        let json = record_run(&machine_json(&later, Some(&json)), "table1", &later);
-        let want = |n: &str, r: &str, d: &str| (n.to_owned(), r.to_owned(), d.to_owned());
+        later.os = "host b".into();
+        let json = record_run(&machine_json(&later, Some(&json)), "table1", &later, 37.504);
+        let want = |n: &str, r: &str, d: &str, os: &str, ms: f64| RunRecord {
+            experiment: n.to_owned(),
+            git_rev: r.to_owned(),
+            date: d.to_owned(),
+            os: Some(os.to_owned()),
+            probe_ms: Some(ms),
+        };
         assert_eq!(
             runs(&json),
-            vec![want("kernels", "aaa", "d1"), want("table1", "bbb", "d2")]
+            vec![
+                want("kernels", "aaa", "d1", "host a", 25.0),
+                want("table1", "bbb", "d2", "host b", 37.5)
+            ]
         );
         let parsed: serde_json::Value = serde_json::from_str(&json).unwrap();
         assert_eq!(parsed["runs"]["kernels"]["git_rev"], "aaa");
         assert_eq!(parsed["git_rev"], "bbb");
+        // Entries written before `os` and `probe_ms` were recorded still read.
+        let old = r#"{
+  "runs": {"kernels":{"date":"d0","git_rev":"ccc"}}
+}"#;
+        assert_eq!(
+            runs(old),
+            vec![RunRecord {
+                experiment: "kernels".into(),
+                git_rev: "ccc".into(),
+                date: "d0".into(),
+                os: None,
+                probe_ms: None,
+            }]
+        );
         // Another CPU's runs are not this one's.
         let mut other = later.clone();
         other.cpu = "another CPU".into();
         assert!(runs(&machine_json(&other, Some(&json))).is_empty());
         assert!(runs("{}").is_empty());
+    }
+
+    #[test]
+    fn the_speed_probe_takes_a_positive_finite_time() {
+        let ms = speed_probe_ms();
+        assert!(ms.is_finite() && ms > 0.0, "{ms}");
     }
 }

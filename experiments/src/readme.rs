@@ -160,14 +160,28 @@ fn machine_section(ctx: &Ctx, problems: &mut Vec<String>) -> String {
         markdown_table(&["key", "value"], &rows)
     );
     if !runs.is_empty() {
+        let unknown = || "(not recorded)".to_owned();
         let rows: Vec<Vec<String>> = runs
             .into_iter()
-            .map(|(name, rev, date)| vec![format!("`{name}`"), rev, date])
+            .map(|r| {
+                vec![
+                    format!("`{}`", r.experiment),
+                    r.git_rev,
+                    r.date,
+                    r.os.unwrap_or_else(unknown),
+                    r.probe_ms.map_or_else(unknown, |ms| format!("{ms:.1}")),
+                ]
+            })
             .collect();
         md.push_str(&format!(
             "The run that wrote each experiment's results here (`runs` in `machine.json`; \
-             sections of experiments not listed come from runs before this record was kept):\n\n{}\n",
-            markdown_table(&["experiment", "git_rev", "date"], &rows)
+             sections of experiments not listed come from runs before this record was kept). \
+             Hosts of the same CPU model differ in speed: `probe_ms` is a fixed single-thread \
+             scalar loop timed when the experiment finished (median of 5), and the `os` line's \
+             kernel build tells hosts apart. Ratios within an experiment (speedups, BSP / \
+             Embree) come from one run; absolute times of two experiments compare only where \
+             their probes agree.\n\n{}\n",
+            markdown_table(&["experiment", "git_rev", "date", "os", "probe_ms"], &rows)
         ));
     }
     md
