@@ -12,14 +12,14 @@
 //! (`git_rev`), the date, the `os` line (its kernel build tells hosts apart) and a speed probe
 //! (`probe_ms`) of the run that wrote them. `--only` runs replace some sections and keep the
 //! others, so the machine's own `git_rev` names only the last run. Hosts that report the same
-//! CPU model differ in speed (this workplace's hosts by up to 1.5x in frame time), so the probe
+//! CPU model differ in speed (this workplace's hosts by up to 1.77x in frame time), so the probe
 //! says whether two experiments' absolute times can be compared.
 
 use std::time::Instant;
 
 use coherent::machine::Machine;
 
-/// Steps of the speed probe's loop: some 25 ms on a 2.6 GHz Zen 4.
+/// Steps of the speed probe's loop: 16.5 ms on this workplace's 2.6 GHz Zen 4 hosts.
 const PROBE_STEPS: u64 = 10_000_000;
 
 /// Milliseconds of a fixed single-thread scalar loop (a dependent chain of `f64` multiplies and
