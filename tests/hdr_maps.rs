@@ -7,20 +7,10 @@
 use std::path::Path;
 
 use coherent::light::{Environment, Light};
+use coherent::render::rng;
 use coherent::simd::scalar::Scalar;
 use coherent::simd::{Lanes, SimdMask, Vec3s};
 use glam::Vec3;
-
-/// A uniform number in [0, 1) from a counter (SplitMix64's finaliser).
-fn uniform(i: u32) -> f32 {
-    let mut z = (i as u64)
-        .wrapping_add(1)
-        .wrapping_mul(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^= z >> 31;
-    (z >> 40) as f32 / (1u64 << 24) as f32
-}
 
 /// Irradiance on a surface facing `n` by summing every texel: `sum L cos(theta_n) dw`.
 fn brute_force(env: &Environment, n: Vec3) -> f64 {
@@ -92,9 +82,9 @@ fn blender_world_maps_load_and_their_sampled_irradiance_matches_the_texel_sum() 
             let mut got = 0.0f64;
             for k in 0..samples {
                 // The light puts sample k in cell k of its strata grid; the numbers only
-                // place it inside the cell, so they are plain pseudo-random ones, as the
-                // renderer's are.
-                let u = [l.splat(uniform(2 * k)), l.splat(uniform(2 * k + 1))];
+                // place it inside the cell: the renderer's own hashed ones.
+                let id = l.splat_i32(k as i32);
+                let u = [rng::uniform(l, id, 0), rng::uniform(l, id, 0x5555_5555)];
                 let s = light.sample(
                     l,
                     &Vec3s::splat(l, Vec3::ZERO),
