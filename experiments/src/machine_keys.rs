@@ -19,7 +19,8 @@ use std::time::Instant;
 
 use coherent::machine::Machine;
 
-/// Steps of the speed probe's loop: 16.5 ms on this workplace's 2.6 GHz Zen 4 hosts.
+/// Steps of the speed probe's loop: 16.5 ms on the 2.6 GHz Zen 4 host that ran `table5` of
+/// `results/` (the probe was added after the other experiments there had run).
 const PROBE_STEPS: u64 = 10_000_000;
 
 /// Milliseconds of a fixed single-thread scalar loop (a dependent chain of `f64` multiplies and
