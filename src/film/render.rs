@@ -150,9 +150,9 @@ pub fn render<T: SampleTracer>(
         let places: Vec<Place> = (begin..end).map(|i| Place::new(tile, i)).collect();
 
         // Each tile files its samples into the film as soon as they are traced, into the
-        // band of its row of tiles (locked for the filing only: tiles of one row are rarely
-        // traced at the same moment). Tiles do not share pixels and a tile files its samples
-        // in trace order, so each pixel's sums do not depend on the threads.
+        // band of its row of tiles, locked while one tile files (144 samples at 1 spp). Tiles
+        // do not share pixels and a tile files its samples in trace order, so each pixel's
+        // sums do not depend on the threads.
         let bands: Vec<Mutex<FilmBand<'_>>> = film
             .bands(tile.height())
             .into_iter()
