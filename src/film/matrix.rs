@@ -25,9 +25,16 @@ pub fn matrix_of(p: u64, k: u64) -> usize {
 }
 
 /// Colour sums and sample counts per pixel.
+///
+/// The sums are `f32`, as the paper's screen matrices hold colours. The matrices are a
+/// frame's largest allocation, fresh pages every frame, and each page costs a fault: at
+/// 1024 x 768 they are 25 MB with `f32` sums against 44 MB with `f64` ones, and a
+/// single-thread `coherent render cornell` took 10,118 page faults instead of 14,730. A
+/// pixel's sum of `n` samples has a relative rounding error below `n * 2^-24`: under 2e-6 at
+/// the adaptive method's default cap of 64 samples per pixel, far below a display step.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ScreenMatrix {
-    pub sum: Vec<[f64; 3]>,
+    pub sum: Vec<[f32; 3]>,
     pub count: Vec<u32>,
 }
 
@@ -38,7 +45,7 @@ impl ScreenMatrix {
     /// with the samples filed in parallel, that made 2 threads slower than 1.
     fn new(pixels: usize) -> ScreenMatrix {
         let mut sum = Vec::with_capacity(pixels);
-        sum.par_extend(rayon::iter::repeat_n([0.0f64; 3], pixels));
+        sum.par_extend(rayon::iter::repeat_n([0.0f32; 3], pixels));
         let mut count = Vec::with_capacity(pixels);
         count.par_extend(rayon::iter::repeat_n(0u32, pixels));
         ScreenMatrix { sum, count }
@@ -51,7 +58,7 @@ impl ScreenMatrix {
         }
         let s = self.sum[p];
         let k = 1.0 / n as f64;
-        [(s[0] * k) as f32, (s[1] * k) as f32, (s[2] * k) as f32]
+        s.map(|c| (c as f64 * k) as f32)
     }
 }
 
@@ -130,7 +137,7 @@ impl Film {
         let mut c = [0.0f64; 3];
         for m in &self.matrices {
             for (ci, s) in c.iter_mut().zip(m.sum[p]) {
-                *ci += s;
+                *ci += s as f64;
             }
         }
         let k = 1.0 / n as f64;
@@ -148,7 +155,7 @@ impl Film {
 pub(crate) struct FilmBand<'a> {
     /// The pixel index of the band's first pixel.
     first: usize,
-    sums: [&'a mut [[f64; 3]]; 2],
+    sums: [&'a mut [[f32; 3]]; 2],
     counts: [&'a mut [u32]; 2],
 }
 
@@ -161,7 +168,7 @@ impl FilmBand<'_> {
         let i = p - self.first;
         self.counts[m][i] += 1;
         for (s, v) in self.sums[m][i].iter_mut().zip(c) {
-            *s += v as f64;
+            *s += v;
         }
     }
 }
