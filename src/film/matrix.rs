@@ -30,7 +30,7 @@ pub fn matrix_of(p: u64, k: u64) -> usize {
 /// frame's largest allocation, fresh pages every frame, and each page costs a fault: at
 /// 1024 x 768 they are 25 MB with `f32` sums against 44 MB with `f64` ones, and a
 /// single-thread `coherent render cornell` took 10,118 page faults instead of 14,730. A
-/// pixel's sum of `n` samples has a relative rounding error below `n * 2^-24`: under 2e-6 at
+/// pixel's sum of `n` samples has a relative rounding error below `n * 2^-24`: under 4e-6 at
 /// the adaptive method's default cap of 64 samples per pixel, far below a display step.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ScreenMatrix {
