@@ -138,4 +138,20 @@ impl<const K: usize> PacketK<K> {
         }
         b & self.bits
     }
+
+    /// After [`Embree::intersect_k`]: adds each hit lane's `t` (in the ray's own units) to
+    /// lane `i` of `acc`, and returns how many lanes hit. One pass over the lanes with a
+    /// select, not a branch, per lane, so the compiler makes vector code of it: the read-back
+    /// the BSP's packet rows do (a hit mask, its count and a masked add into per-lane sums).
+    #[inline(always)]
+    pub fn accumulate_hits(&self, acc: &mut [f32; K]) -> u32 {
+        let p = &self.rh;
+        let mut n = 0;
+        for i in 0..K {
+            let hit = p.geomID[i] != ffi::INVALID_ID;
+            n += u32::from(hit);
+            acc[i] += if hit { p.tfar[i] + self.shift[i] } else { 0.0 };
+        }
+        n
+    }
 }
