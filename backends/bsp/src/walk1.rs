@@ -23,15 +23,18 @@ pub(crate) struct Ray1x {
     /// `1 / d` per axis (infinite for zero components).
     pub inv: [f32; 4],
     pub tmin: f32,
-    /// Per axis 1 when the direction's sign bit is set: the right child is nearer.
-    pub neg: [usize; 4],
+    /// Bit `k` set when the direction's sign bit along axis `k` is set (bit 3 repeats bit
+    /// 2): the right child is nearer. Bits in a register, not an array: the next node's
+    /// address waits for this choice at every split, and a shift is quicker than a load.
+    pub neg: u32,
 }
 
 impl Ray1x {
     #[inline(always)]
     pub fn new(o: Vec3, d: Vec3, tmin: f32) -> Self {
         let inv = Vec3::new(1.0 / d.x, 1.0 / d.y, 1.0 / d.z);
-        let neg = [d.x, d.y, d.z, d.z].map(|c| c.is_sign_negative() as usize);
+        let [x, y, z] = [d.x, d.y, d.z].map(|c| c.is_sign_negative() as u32);
+        let neg = x | y << 1 | z << 2 | z << 3;
         Self {
             o: xyzz(o),
             d: xyzz(d),
@@ -115,8 +118,9 @@ pub(crate) fn walk1<S, C: Counters>(
             c.inner();
             let k = n.axis() & 3;
             let ts = (n.split() - r.o[k]) * r.inv[k];
-            let near = n.left() + r.neg[k];
-            let far = n.left() + 1 - r.neg[k];
+            let sb = (r.neg >> k & 1) as usize;
+            let near = n.left() + sb;
+            let far = n.left() + 1 - sb;
             if ts > tf {
                 node = near;
             } else if ts < tn {
