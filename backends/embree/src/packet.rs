@@ -144,6 +144,8 @@ impl<const K: usize> PacketK<K> {
     /// select, not a branch, per lane, so the compiler makes vector code of it: the read-back
     /// the BSP's packet rows do (a hit mask, its count and a masked add into per-lane sums).
     #[inline(always)]
+    // One index over four arrays in lockstep (hit ids, far bounds, shifts and the sums).
+    #[allow(clippy::needless_range_loop)]
     pub fn accumulate_hits(&self, acc: &mut [f32; K]) -> u32 {
         let p = &self.rh;
         let mut n = 0;
