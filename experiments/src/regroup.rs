@@ -7,8 +7,8 @@
 //!
 //! Protocol: the scenes and frames of `table3` (same plan) that trace reflection or
 //! refraction rays, the BSP, the hand-written backends of 4, 8 and 16 lanes usable here.
-//! Per scene and backend, one untimed frame each way (the images, compared by PSNR after
-//! tone mapping, and the packet counts), then [`ROUNDS`] rounds alternate the two (which goes
+//! Per scene and backend, one untimed frame each way (the images, compared by PSNR as
+//! displayed: tone-mapped, channels clipped to [0, 1]; and the packet counts), then [`ROUNDS`] rounds alternate the two (which goes
 //! first alternates too); `seconds` is the median, `speedup` = seconds without regrouping /
 //! this row's, `spread` = the slowest round / the fastest: this machine's run-to-run noise,
 //! measured on the very frames compared.
@@ -97,7 +97,7 @@ pub fn run_plan(ctx: &mut Ctx, plan: &Plan, backends: &[Backend]) -> anyhow::Res
             for regroup in [false, true] {
                 r.regroup = regroup;
                 let (rendered, _) = frames::frame(&pool, b, &r, plan)?;
-                images.push(rendered.tone_mapped(Backend::Scalar)?);
+                images.push(rendered.displayed(Backend::Scalar)?);
                 stats.push(rendered.stats);
             }
             if stats[0].depth.len() < 2 {
@@ -255,8 +255,8 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
          secondary packets as they come (`off`: a packet keeps its parent's lanes, as in the \
          paper) and regrouped (`on`: per node of the ray tree, the partial packets of a film \
          tile compacted into full packets; full ones pass as they are). One untimed frame each way gives the \
-         packet counts and the images (PSNR of the regrouped image against the other after \
-         tone mapping: they differ by rounding and by edge hits), then {ROUNDS} rounds alternate \
+         packet counts and the images (PSNR of the regrouped image against the other as \
+         displayed: they differ by rounding and by edge hits), then {ROUNDS} rounds alternate \
          them (which goes first alternates too); `seconds` is the median, `rounds spread` \
          the slowest round over the fastest of either way (the noise of that row). \
          `secondary lanes` is the average active lanes per reflection or refraction \

@@ -207,7 +207,7 @@ pub fn run_plan(
         for (a, (_, r)) in renderers.iter().enumerate() {
             for &b in backends {
                 let (rendered, _) = frames::frame(&pool, b, r, plan)?;
-                let image = rendered.tone_mapped(Backend::Scalar)?;
+                let image = rendered.displayed(Backend::Scalar)?;
                 let db = match &reference {
                     None => {
                         let png = format!("images/table3_{name}.png");
@@ -318,7 +318,7 @@ pub fn run_plan(
             let mut tiled: Option<Vec<[f32; 3]>> = None;
             for &b in backends {
                 let (rendered, _) = frames::frame(&pool, b, r, plan)?;
-                let image = rendered.tone_mapped(Backend::Scalar)?;
+                let image = rendered.displayed(Backend::Scalar)?;
                 let db = match &tiled {
                     None => f64::INFINITY,
                     Some(t) => psnr(&image, t, 1.0),
@@ -563,7 +563,8 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
          --threads 1` renders them, 1 thread; every (accel, backend) pair renders once \
          untimed, then 3 rounds visit every pair in turn and `seconds` is the median. \
          `speedup` = the scalar row's seconds (same scene, same accel) / this row's; \
-         `psnr_db` compares the tone-mapped image with the scalar + BSP one (peak 1). Quick \
+         `psnr_db` compares the image as displayed (tone-mapped, each channel clipped to [0, 1] \
+         as the PNG encodes it) with the scalar + BSP one (peak 1). Quick \
          mode renders only the scenes up to 20,000 triangles, at 160 x 120.\n\n"
     ));
     let mut ours = Vec::new();

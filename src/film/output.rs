@@ -21,10 +21,25 @@ impl<S> Rendered<S> {
         self.film.estimate()
     }
 
-    /// The tone-mapped image (display values in `[0, 1]`), computed in packets with
-    /// `backend`.
+    /// The tone-mapped image, computed in packets with `backend`: each pixel's colour scaled
+    /// so that its luminance is the operator's display luminance in `[0, 1]`. A saturated
+    /// colour's channels may then exceed 1 (pure blue at display luminance 1 has
+    /// `b = 1 / 0.0722`); a display clips them, see [`Rendered::displayed`].
     pub fn tone_mapped(&self, backend: Backend) -> Result<Vec<[f32; 3]>, FilmError> {
         Ok(tonemap::apply_image(backend, &self.tonemap, &self.image())?)
+    }
+
+    /// The image as a display shows it and the PNG encodes it (before the sRGB curve): the
+    /// tone-mapped image with each channel clipped to `[0, 1]` (NaN as 0, as in the PNG). Images are compared on these
+    /// values (PSNR with peak 1), since channels above 1 are never shown.
+    pub fn displayed(&self, backend: Backend) -> Result<Vec<[f32; 3]>, FilmError> {
+        let mut image = self.tone_mapped(backend)?;
+        for px in &mut image {
+            for c in px.iter_mut() {
+                *c = if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) };
+            }
+        }
+        Ok(image)
     }
 
     /// Writes the HDR radiance to an OpenEXR file.
@@ -40,7 +55,7 @@ impl<S> Rendered<S> {
             path,
             self.film.width,
             self.film.height,
-            &self.tone_mapped(backend)?,
+            &self.displayed(backend)?,
         )
     }
 

@@ -353,6 +353,42 @@ fn images_are_written_and_bad_paths_named() {
     assert!(e.contains("y.png"), "{e}");
 }
 
+/// Bright saturated blue beside a dim grey: the tone map brings the blue's luminance into
+/// `[0, 1]`, so its blue channel goes above 1.
+fn saturated(x: f32, _y: f32) -> [f32; 3] {
+    if x < 8.0 {
+        [0.0, 0.0, 50.0]
+    } else {
+        [0.05, 0.05, 0.05]
+    }
+}
+
+#[test]
+fn displayed_clips_the_channels_a_display_cannot_show() {
+    let t = Analytic::new(saturated);
+    let r = render(
+        Backend::Scalar,
+        &t,
+        &FilmOptions::new(16, 9, Method::Uniform { spp: 1 }),
+        &quiet,
+    )
+    .unwrap();
+    let mapped = r.tone_mapped(Backend::Scalar).unwrap();
+    let shown = r.displayed(Backend::Scalar).unwrap();
+    assert!(
+        mapped.iter().any(|c| c[2] > 1.0),
+        "the blue half should map above 1: {:?}",
+        mapped[0]
+    );
+    assert_eq!(mapped.len(), shown.len());
+    for (m, s) in mapped.iter().zip(&shown) {
+        for c in 0..3 {
+            assert_eq!(s[c], m[c].clamp(0.0, 1.0));
+        }
+    }
+    assert!(shown.iter().all(|c| c.iter().all(|v| (0.0..=1.0).contains(v))));
+}
+
 #[test]
 fn matrices_split_each_pair_of_samples() {
     for p in 0..50u64 {
