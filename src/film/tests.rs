@@ -386,7 +386,11 @@ fn displayed_clips_the_channels_a_display_cannot_show() {
             assert_eq!(s[c], m[c].clamp(0.0, 1.0));
         }
     }
-    assert!(shown.iter().all(|c| c.iter().all(|v| (0.0..=1.0).contains(v))));
+    assert!(
+        shown
+            .iter()
+            .all(|c| c.iter().all(|v| (0.0..=1.0).contains(v)))
+    );
 }
 
 #[test]
