@@ -30,8 +30,9 @@ impl<S> Rendered<S> {
     }
 
     /// The image as a display shows it and the PNG encodes it (before the sRGB curve): the
-    /// tone-mapped image with each channel clipped to `[0, 1]` (NaN as 0, as in the PNG). Images are compared on these
-    /// values (PSNR with peak 1), since channels above 1 are never shown.
+    /// tone-mapped image with each channel clipped to `[0, 1]` (NaN as 0, as in the PNG).
+    /// Images are compared on these values (PSNR with peak 1), since channels above 1 are
+    /// never shown.
     pub fn displayed(&self, backend: Backend) -> Result<Vec<[f32; 3]>, FilmError> {
         let mut image = self.tone_mapped(backend)?;
         for px in &mut image {
