@@ -325,16 +325,21 @@ fn nan_and_negative_radiance_are_counted_and_fixed() {
     );
 }
 
-#[test]
-fn images_are_written_and_bad_paths_named() {
-    let t = Analytic::new(edge);
-    let r = render(
+/// A 16 x 9 image of `f`, one sample per pixel, on the scalar backend.
+fn one_sample_16x9(f: fn(f32, f32) -> [f32; 3]) -> Rendered<u64> {
+    let t = Analytic::new(f);
+    render(
         Backend::Scalar,
         &t,
         &FilmOptions::new(16, 9, Method::Uniform { spp: 1 }),
         &quiet,
     )
-    .unwrap();
+    .unwrap()
+}
+
+#[test]
+fn images_are_written_and_bad_paths_named() {
+    let r = one_sample_16x9(edge);
     let dir = tempfile::tempdir().unwrap();
     for name in ["a.exr", "a.png"] {
         r.write(&dir.path().join(name)).unwrap();
@@ -365,14 +370,7 @@ fn saturated(x: f32, _y: f32) -> [f32; 3] {
 
 #[test]
 fn displayed_clips_the_channels_a_display_cannot_show() {
-    let t = Analytic::new(saturated);
-    let r = render(
-        Backend::Scalar,
-        &t,
-        &FilmOptions::new(16, 9, Method::Uniform { spp: 1 }),
-        &quiet,
-    )
-    .unwrap();
+    let r = one_sample_16x9(saturated);
     let mapped = r.tone_mapped(Backend::Scalar).unwrap();
     let shown = r.displayed(Backend::Scalar).unwrap();
     assert!(
