@@ -33,7 +33,11 @@ pub const EXPERIMENT: Experiment = Experiment {
     paper: "section 6.2",
     csv: &[FILE, GROUPS_FILE],
     plots: &["aa_rmse_vs_rays", "aa_rmse_vs_seconds"],
-    status: Status::Ready { run, report },
+    status: Status::Ready {
+        run,
+        plot: plots,
+        report,
+    },
 };
 
 const FILE: &str = "aa.csv";
@@ -267,7 +271,6 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     bar.finish_and_clear();
     csv.finish()?;
     groups.finish()?;
-    plots(ctx)?;
     Ok(())
 }
 

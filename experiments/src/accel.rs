@@ -71,7 +71,11 @@ pub const EXPERIMENT: Experiment = Experiment {
         "accel_build",
         "accel_memory",
     ],
-    status: Status::Ready { run, report },
+    status: Status::Ready {
+        run,
+        plot: plots,
+        report,
+    },
 };
 
 const HEADER: &[&str] = &[
@@ -687,7 +691,6 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
         );
     }
     bar.finish_and_clear();
-    plots(ctx)?;
     Ok(())
 }
 
@@ -1122,7 +1125,12 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
 type Rows = BTreeMap<(String, String, String, usize), (f64, f64, f64)>;
 
 fn read_rows(ctx: &Ctx) -> anyhow::Result<Option<(Rows, Vec<String>)>> {
-    let Some(t) = read_either(ctx, "accel.csv", HEADER)? else {
+    read_rows_of(ctx, "accel.csv")
+}
+
+/// [`read_rows`] of `file` (a path in the output folder).
+fn read_rows_of(ctx: &Ctx, file: &str) -> anyhow::Result<Option<(Rows, Vec<String>)>> {
+    let Some(t) = read_either(ctx, file, HEADER)? else {
         return Ok(None);
     };
     let mut rows = Rows::new();
@@ -1222,31 +1230,20 @@ fn compare_plots(ctx: &Ctx) -> anyhow::Result<()> {
 /// The comparison tables: the BSP against Embree per scene, ray kind and width with the
 /// targets, the cross-check, Embree's harness against a plain C-API loop, the native build
 /// beside the portable one, build time and memory.
-fn compare_report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
-    let Some((rows, scenes)) = read_rows(ctx)? else {
-        return Ok(None);
-    };
+/// BSP / Embree per scene, ray kind and width, and BSP / obvhs single rays, each ratio below
+/// its target marked with `!`.
+fn ratio_table(rows: &Rows, scenes: &[String]) -> String {
     let get = |s: &str, a: &str, k: &str, w: usize| {
         rows.get(&(s.to_string(), a.to_string(), k.to_string(), w))
             .map(|r| r.0)
     };
-    let mut md = String::new();
-    md.push_str(&embree_facts(ctx));
-    md.push_str(
-        "\nThe BSP against Embree 4 at equal width (Mrays/s ratio, one thread, the same rays; \
-         Embree's packet rows trace its own packets packed before timing), and the BSP's \
-         single rays against obvhs (CWBVH, single rays only). Targets: primary and shadow \
-         rays >= 1.0 at widths 4, 8, 16 and >= 0.8 single; diffuse rays >= 0.7 at every \
-         width; against obvhs >= 2 (in the native build). A ratio below its target is marked \
-         with `!`.\n\n",
-    );
     let target = |kind: &str, w: usize| match (kind, w) {
         ("diffuse", _) => 0.7,
         (_, 1) => 0.8,
         _ => 1.0,
     };
     let mut table = Vec::new();
-    for s in &scenes {
+    for s in scenes {
         for kind in RayKind::ALL {
             let k = kind.name();
             let mut row = vec![s.clone(), k.to_string()];
@@ -1270,7 +1267,7 @@ fn compare_report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
             table.push(row);
         }
     }
-    md.push_str(&markdown_table(
+    markdown_table(
         &[
             "scene",
             "rays",
@@ -1281,7 +1278,24 @@ fn compare_report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
             "bsp/obvhs x1",
         ],
         &table,
-    ));
+    )
+}
+
+fn compare_report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
+    let Some((rows, scenes)) = read_rows(ctx)? else {
+        return Ok(None);
+    };
+    let mut md = String::new();
+    md.push_str(&embree_facts(ctx));
+    md.push_str(
+        "\nThe BSP against Embree 4 at equal width (Mrays/s ratio, one thread, the same rays; \
+         Embree's packet rows trace its own packets packed before timing), and the BSP's \
+         single rays against obvhs (CWBVH, single rays only). Targets: primary and shadow \
+         rays >= 1.0 at widths 4, 8, 16 and >= 0.8 single; diffuse rays >= 0.7 at every \
+         width; against obvhs >= 2 (in the native build). A ratio below its target is marked \
+         with `!`.\n\n",
+    );
+    md.push_str(&ratio_table(&rows, &scenes));
     md.push_str(
         "\nCross-check: every row of `accel.csv` carries the hits and the sum of hit `t` over \
          its rays (`hits`, `t_sum`); the run fails when any accelerator or width differs from \
@@ -1340,12 +1354,20 @@ fn compare_report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
             md.push('\n');
         }
     }
+    if let Some(m) = manycore_report(ctx)? {
+        md.push_str(&m);
+    }
     Ok(Some(md))
 }
 
 /// What Embree ran (from `machine.json`'s `embree` key), as a sentence.
 fn embree_facts(ctx: &Ctx) -> String {
-    let json = std::fs::read_to_string(ctx.path("machine.json"))
+    embree_facts_of(ctx, "machine.json")
+}
+
+/// [`embree_facts`] from the `machine.json` at `file` in the output folder.
+fn embree_facts_of(ctx: &Ctx, file: &str) -> String {
+    let json = std::fs::read_to_string(ctx.path(file))
         .ok()
         .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
     let Some(j) = json else {
@@ -1363,6 +1385,44 @@ fn embree_facts(ctx: &Ctx) -> String {
         ),
         None => format!("\nNo Embree was loaded; this is the {build} build.\n"),
     }
+}
+
+/// Where a run of this experiment on another machine lies, beside these results (as for
+/// `table5`: a machine lent for a session, its own `machine.json`, README and plots).
+const MANYCORE: &str = "manycore";
+
+/// The ratios of the same experiment run on another machine (`manycore/accel.csv`), and how
+/// Embree's rates through the harness compared with a plain C-API loop there.
+fn manycore_report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
+    let Some((rows, scenes)) = read_rows_of(ctx, &format!("{MANYCORE}/accel.csv"))? else {
+        return Ok(None);
+    };
+    let about = crate::table5::manycore_machine(ctx, "accel");
+    let mut md = format!(
+        "\n### On another machine\n\nThe same rays, widths and protocol (portable build, one \
+         thread) on {about} (`{MANYCORE}/`: its own [README]({MANYCORE}/README.md#accel--traversal-speed-build-time-and-memory-per-accel-ray-kind-and-packet-width), \
+         `machine.json`, CSV files and plots). That machine was lent for a session, so these \
+         rows come from another CPU than the rest of this report.\n"
+    );
+    md.push_str(&embree_facts_of(ctx, &format!("{MANYCORE}/machine.json")));
+    md.push('\n');
+    md.push_str(&ratio_table(&rows, &scenes));
+    if let Some(e) = ctx.read_csv(&format!("{MANYCORE}/accel_embree.csv"), EMBREE_HEADER)? {
+        let mut ratios = Vec::new();
+        for r in 0..e.rows.len() {
+            ratios.push(e.f64(r, "harness_over_plain")?);
+        }
+        ratios.sort_by(f64::total_cmp);
+        if let (Some(lo), Some(hi)) = (ratios.first(), ratios.last()) {
+            md.push_str(&format!(
+                "\nEmbree through the harness over a plain C-API loop there \
+                 (`{MANYCORE}/accel_embree.csv`, {} rows): median {:.3}, range {lo:.3}-{hi:.3}.\n",
+                ratios.len(),
+                ratios[ratios.len() / 2],
+            ));
+        }
+    }
+    Ok(Some(md))
 }
 
 /// The portable build beside the native one (`native/accel.csv`, written by
@@ -1457,5 +1517,40 @@ mod tests {
             None
         );
         assert!(disagreement(&pass(7107, 0.0), &pass(7000, 0.0), 10_000).is_some());
+    }
+
+    #[test]
+    fn a_run_on_another_machine_is_reported_with_that_machine() {
+        let dir = tempfile::tempdir().unwrap();
+        let ctx = Ctx::new(dir.path(), true, coherent::machine::Machine::detect());
+        let rows = "scene,accel,rays,width,mrays_per_s,build_ms,memory_bytes,hits,t_sum\n\
+                    room,bsp,shadow,4,12.0,1,1,5,0\n\
+                    room,embree,shadow,4,10.0,1,1,5,0\n";
+        std::fs::write(ctx.path("accel.csv"), rows).unwrap();
+        let md = compare_report(&ctx).unwrap().unwrap();
+        assert!(!md.contains("On another machine"), "{md}");
+
+        std::fs::create_dir(ctx.path(MANYCORE)).unwrap();
+        let other = rows.replace("12.0", "6.0");
+        std::fs::write(ctx.path(&format!("{MANYCORE}/accel.csv")), other).unwrap();
+        std::fs::write(
+            ctx.path(&format!("{MANYCORE}/machine.json")),
+            r#"{"cpu": "Other CPU", "cores": 16, "threads": 16, "git_rev": "new", "date": "now",
+                "embree": {"version": "4.4.0", "isa": "avx512", "native_packets": [4, 8, 16]},
+                "runs": {"accel": {"git_rev": "abc", "date": "then"}}}"#,
+        )
+        .unwrap();
+        let md = compare_report(&ctx).unwrap().unwrap();
+        let (here, there) = md.split_once("### On another machine").unwrap();
+        assert!(here.contains("| room | shadow | - | 1.20 |"), "{here}");
+        assert!(there.contains("| room | shadow | - | 0.60 ! |"), "{there}");
+        assert!(
+            there.contains("Other CPU with 16 cores (16 hardware threads), git revision `abc`"),
+            "{there}"
+        );
+        assert!(
+            there.contains("Embree 4.4.0 ran its avx512 kernels"),
+            "{there}"
+        );
     }
 }

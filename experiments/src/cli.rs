@@ -124,11 +124,28 @@ fn run(
             .and_then(|text| Machine::from_json(&text).ok())
             .unwrap_or_else(Machine::detect);
         let ctx = Ctx::new(&out, false, machine);
+        // Every plot is redrawn from the CSV files, as the report is.
+        let mut failed = Vec::new();
+        for experiment in registry {
+            if let Status::Ready { plot, .. } = experiment.status
+                && let Err(e) = plot(&ctx)
+            {
+                eprintln!(
+                    "reproduce: cannot draw the plots of {}: {e:#}",
+                    experiment.name
+                );
+                failed.push(experiment.name);
+            }
+        }
         let info = RunInfo {
             ran: Vec::new(),
             args: given.to_owned(),
         };
-        return write_readme(&ctx, registry, info);
+        write_readme(&ctx, registry, info)?;
+        if !failed.is_empty() {
+            anyhow::bail!("plots not drawn: {}", failed.join(", "));
+        }
+        return Ok(());
     }
     let machine = Machine::detect();
     let previous = std::fs::read_to_string(&machine_json).ok();
@@ -149,14 +166,17 @@ fn run(
     let mut failed = Vec::new();
     let mut ran = Vec::new();
     for experiment in selected {
-        let Status::Ready { run, .. } = experiment.status else {
+        let Status::Ready { run, plot, .. } = experiment.status else {
             continue; // `select` refuses planned ones
         };
         eprintln!("== {}: {}", experiment.name, experiment.description);
         let start = Instant::now();
         // A panic is a bug of that experiment: report it and go on with the others.
-        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(&mut ctx)))
-            .unwrap_or_else(|_| Err(anyhow::anyhow!("panicked (a bug: please report it)")));
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            run(&mut ctx)?;
+            plot(&ctx).context("cannot draw its plots")
+        }))
+        .unwrap_or_else(|_| Err(anyhow::anyhow!("panicked (a bug: please report it)")));
         match result {
             Ok(()) => {
                 eprintln!(
@@ -275,7 +295,11 @@ mod tests {
             paper: "—",
             csv: &[],
             plots: &[],
-            status: Status::Ready { run, report },
+            status: Status::Ready {
+                run,
+                plot: crate::experiment::no_plots,
+                report,
+            },
         }
     }
 
@@ -310,6 +334,59 @@ mod tests {
         assert_eq!(
             main(args.iter().map(OsString::from), &registry),
             ExitCode::SUCCESS
+        );
+    }
+
+    /// A plot from `good.csv`: one point per row (the row count as x).
+    fn plot_good(ctx: &Ctx) -> anyhow::Result<()> {
+        let Some(t) = ctx.read_csv("good.csv", HEADER)? else {
+            return Ok(());
+        };
+        let points = vec![(t.rows.len() as f64, 1.0), (2.0, 2.0)];
+        ctx.line_chart(
+            "good",
+            &crate::plot::LineChart {
+                title: "good".into(),
+                x_label: "x".into(),
+                y_label: "y".into(),
+                series: vec![crate::plot::Series::new("good", points)],
+                log2_x: false,
+            },
+        )?;
+        Ok(())
+    }
+
+    #[test]
+    fn plots_are_drawn_after_a_run_and_redrawn_from_the_csv_by_report_only() {
+        let mut good = experiment("good", good);
+        if let Status::Ready { plot, .. } = &mut good.status {
+            *plot = plot_good;
+        }
+        let registry = [good];
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().to_str().unwrap();
+        let run = ["reproduce", "--quick", "--out", out];
+        assert_eq!(
+            main(run.iter().map(OsString::from), &registry),
+            ExitCode::SUCCESS
+        );
+        let png = dir.path().join("plots/good.png");
+        assert!(png.is_file());
+
+        // Gone (or measured elsewhere and copied in): --report-only draws it again from the CSV.
+        std::fs::remove_file(&png).unwrap();
+        let report = ["reproduce", "--report-only", "--out", out];
+        assert_eq!(
+            main(report.iter().map(OsString::from), &registry),
+            ExitCode::SUCCESS
+        );
+        assert!(png.is_file());
+
+        // A CSV that cannot be read fails the command, naming the experiment's plots.
+        std::fs::write(dir.path().join("good.csv"), "not,the,header\n").unwrap();
+        assert_eq!(
+            main(report.iter().map(OsString::from), &registry),
+            ExitCode::FAILURE
         );
     }
 

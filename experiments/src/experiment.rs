@@ -3,7 +3,9 @@
 //!
 //! An experiment is one module exporting a `const EXPERIMENT`, listed in
 //! [`crate::EXPERIMENTS`]. `run` measures and writes CSV rows (under the contract's exact
-//! header) and plots; `report` renders the README section from the CSV alone:
+//! header); `plot` draws the plots and `report` renders the README section, both from the CSV
+//! alone, so that `reproduce --report-only` redraws every plot and section from CSV files
+//! (edited, merged, or measured on another machine):
 //!
 //! ```
 //! use coherent_experiments::plot::{LineChart, Series};
@@ -19,7 +21,7 @@
 //!     paper: "Table 1 (section 4.2)",
 //!     csv: &[FILE],
 //!     plots: &["table1_speedup"],
-//!     status: Status::Ready { run, report },
+//!     status: Status::Ready { run, plot, report },
 //! };
 //!
 //! /// The paper's figures, as data (Pentium 4 1.8 GHz, non-SSE vs SSE).
@@ -38,17 +40,26 @@
 //!     let sizes: Vec<usize> = ctx.pick(vec![10_000], vec![100_000, 200_000, 400_000]);
 //!     let mut csv = ctx.csv(FILE, HEADER)?;
 //!     let bar = ctx.progress(sizes.len() as u64, "table1");
-//!     let mut points = Vec::new();
 //!     for &calls in &sizes {
 //!         // Real experiments loop over `coherent::simd::Backend::available()` and time a
 //!         // `Kernel` through `backend.run(kernel)`.
 //!         let scalar = ctx.time(|| (0..calls).map(|i| (i as f32).sqrt()).sum::<f32>());
 //!         csv.row(&[&calls, &"scalar", &1, &scalar.median, &1.0])?;
-//!         points.push((1.0, 1.0));
 //!         bar.inc(1);
 //!     }
 //!     bar.finish_and_clear();
 //!     csv.finish()?;
+//!     Ok(())
+//! }
+//!
+//! fn plot(ctx: &Ctx) -> anyhow::Result<()> {
+//!     let Some(table) = ctx.read_csv(FILE, HEADER)? else {
+//!         return Ok(()); // not run into this folder yet
+//!     };
+//!     let mut points = Vec::new();
+//!     for r in 0..table.rows.len() {
+//!         points.push((table.f64(r, "lanes")?, table.f64(r, "speedup")?));
+//!     }
 //!     ctx.line_chart(
 //!         "table1_speedup",
 //!         &LineChart {
@@ -87,8 +98,10 @@
 //! // Try it in a temporary folder:
 //! let dir = tempfile::tempdir()?;
 //! let mut ctx = Ctx::new(dir.path(), true, coherent::machine::Machine::detect());
-//! let Status::Ready { run, report } = EXPERIMENT.status else { unreachable!() };
+//! let Status::Ready { run, plot, report } = EXPERIMENT.status else { unreachable!() };
 //! run(&mut ctx)?;
+//! plot(&ctx)?;
+//! assert!(dir.path().join("plots/table1_speedup.png").is_file());
 //! let section = report(&ctx)?.expect("the CSV is there");
 //! assert!(section.contains("| 10000 | — | "));
 //! # Ok::<(), anyhow::Error>(())
@@ -96,8 +109,18 @@
 
 use crate::ctx::Ctx;
 
-/// Measures: writes the experiment's CSV(s) and plots into `ctx.out`.
+/// Measures: writes the experiment's CSV(s) into `ctx.out`.
 pub type RunFn = fn(&mut Ctx) -> anyhow::Result<()>;
+
+/// Draws the experiment's plots into `ctx.out/plots` from the CSV files in `ctx.out` (never
+/// from memory), after each `run` and on `--report-only`. `Ok(())` without drawing when its
+/// CSV is not there; `Err` when it is there but unreadable.
+pub type PlotFn = fn(&Ctx) -> anyhow::Result<()>;
+
+/// The [`PlotFn`] of an experiment without plots.
+pub fn no_plots(_: &Ctx) -> anyhow::Result<()> {
+    Ok(())
+}
 
 /// Renders the experiment's section of `README.md` from the CSV files in `ctx.out` (never
 /// from memory: `--only x` re-runs x and the README still shows the others' last results).
@@ -108,7 +131,11 @@ pub type ReportFn = fn(&Ctx) -> anyhow::Result<Option<String>>;
 #[derive(Clone, Copy, Debug)]
 pub enum Status {
     /// Implemented.
-    Ready { run: RunFn, report: ReportFn },
+    Ready {
+        run: RunFn,
+        plot: PlotFn,
+        report: ReportFn,
+    },
     /// Registered so its name is known, but not written yet; `waits_for` says in the user's
     /// words what it needs first (e.g. "the renderer"), where that is known.
     Planned { waits_for: Option<&'static str> },
@@ -246,7 +273,11 @@ mod tests {
         Ok(None)
     }
 
-    const READY: Status = Status::Ready { run, report };
+    const READY: Status = Status::Ready {
+        run,
+        plot: no_plots,
+        report,
+    };
 
     fn registry() -> Vec<Experiment> {
         vec![

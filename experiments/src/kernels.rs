@@ -47,7 +47,11 @@ pub const EXPERIMENT: Experiment = Experiment {
         "portability_texture_trilinear",
         "portability_bdf_anisotropic",
     ],
-    status: Status::Ready { run, report },
+    status: Status::Ready {
+        run,
+        plot: plots,
+        report,
+    },
 };
 
 const HEADER: &[&str] = &["kernel", "backend", "lanes", "seconds", "speedup"];
@@ -306,7 +310,6 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     }
     acc.finish()?;
 
-    plots(ctx)?;
     Ok(())
 }
 
@@ -406,7 +409,7 @@ fn portability_report(ctx: &Ctx, t: &crate::Table) -> anyhow::Result<String> {
     if manycore.is_some() {
         md.push_str(&format!(
             "Rows \"default, other CPU\" are `{MANYCORE_FILE}`: the code of that run's revision, on {}.\n\n",
-            crate::table5::manycore_machine(ctx)
+            crate::table5::manycore_machine(ctx, "kernels")
         ));
     }
     let builds: Vec<(&str, &crate::Table)> = std::iter::once(("default", t))
@@ -686,7 +689,7 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
         md.push_str(&format!(
             "\nThe same run (default build) on {}, lent for a session (`manycore/`, with its own \
              `machine.json`); speedup over scalar there:\n\n",
-            crate::table5::manycore_machine(ctx)
+            crate::table5::manycore_machine(ctx, "kernels")
         ));
         md.push_str(&m.pivot("kernel", "backend", "speedup")?);
     }

@@ -282,7 +282,11 @@ mod tests {
                 paper: "Table 9",
                 csv: &["demo.csv"],
                 plots: &["demo"],
-                status: Status::Ready { run, report },
+                status: Status::Ready {
+                    run,
+                    plot: crate::experiment::no_plots,
+                    report,
+                },
             },
             Experiment::planned(
                 "later",

@@ -34,7 +34,11 @@ pub const EXPERIMENT: Experiment = Experiment {
     paper: "beyond the paper (its packets keep their lanes through every bounce)",
     csv: &[FILE],
     plots: &["regroup_speedup"],
-    status: Status::Ready { run, report },
+    status: Status::Ready {
+        run,
+        plot: plots,
+        report,
+    },
 };
 
 const FILE: &str = "regroup.csv";
@@ -146,7 +150,6 @@ pub fn run_plan(ctx: &mut Ctx, plan: &Plan, backends: &[Backend]) -> anyhow::Res
     }
     bar.finish_and_clear();
     csv.finish()?;
-    plot(ctx)?;
     Ok(())
 }
 
@@ -211,7 +214,7 @@ fn secondary(s: &RenderStats) -> (u64, u64) {
         .fold((0, 0), |(p, l), c| (p + c.packets, l + c.lanes))
 }
 
-fn plot(ctx: &Ctx) -> anyhow::Result<()> {
+fn plots(ctx: &Ctx) -> anyhow::Result<()> {
     let Some(t) = ctx.read_csv(FILE, HEADER)? else {
         return Ok(());
     };

@@ -42,7 +42,11 @@ pub const EXPERIMENT: Experiment = Experiment {
         "table1_splits.csv",
     ],
     plots: &["table1_speedup_vs_lanes", "table1_speedup"],
-    status: Status::Ready { run, report },
+    status: Status::Ready {
+        run,
+        plot: plots,
+        report,
+    },
 };
 
 const HEADER: &[&str] = &["calls", "backend", "lanes", "seconds", "speedup"];
@@ -135,7 +139,6 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
 
     coherence(ctx, &bdf, &inputs)?;
     splits(ctx, &backends, &inputs)?;
-    plots(ctx)?;
     Ok(())
 }
 
@@ -390,7 +393,7 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
         md.push_str(&format!(
             "\nThe same run on {}, lent for a session (`manycore/`, with its own \
              `machine.json`); speedup over scalar there:\n\n",
-            crate::table5::manycore_machine(ctx)
+            crate::table5::manycore_machine(ctx, "table1")
         ));
         md.push_str(&m.pivot("calls", "backend", "speedup")?);
     }

@@ -43,7 +43,11 @@ pub const EXPERIMENT: Experiment = Experiment {
     paper: "Table 2 (section 5)",
     csv: &["table2_lights.csv", "table2_variants.csv"],
     plots: &["table2_speedup", "table2_speedup_vs_lanes"],
-    status: Status::Ready { run, report },
+    status: Status::Ready {
+        run,
+        plot: plots,
+        report,
+    },
 };
 
 const FILE: &str = "table2_lights.csv";
@@ -482,7 +486,6 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     }
     csv.finish()?;
     variants.finish()?;
-    plots(ctx)?;
     Ok(())
 }
 

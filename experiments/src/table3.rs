@@ -45,7 +45,11 @@ pub const EXPERIMENT: Experiment = Experiment {
         "table3_coherence",
         "table3_light_samples",
     ],
-    status: Status::Ready { run, report },
+    status: Status::Ready {
+        run,
+        plot: plots,
+        report,
+    },
 };
 
 const FILE: &str = "table3_scenes.csv";
@@ -365,7 +369,6 @@ pub fn run_plan(
         out.row(&[item, why])?;
     }
     out.finish()?;
-    plots(ctx)?;
     Ok(())
 }
 

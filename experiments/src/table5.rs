@@ -28,7 +28,11 @@ pub const EXPERIMENT: Experiment = Experiment {
     paper: "Table 5 (section 7)",
     csv: &[FILE],
     plots: &["table5_threads"],
-    status: Status::Ready { run, report },
+    status: Status::Ready {
+        run,
+        plot: plots,
+        report,
+    },
 };
 
 const FILE: &str = "table5_threads.csv";
@@ -144,11 +148,10 @@ pub fn run_plan(
     }
     bar.finish_and_clear();
     csv.finish()?;
-    plot(ctx)?;
     Ok(())
 }
 
-fn plot(ctx: &Ctx) -> anyhow::Result<()> {
+fn plots(ctx: &Ctx) -> anyhow::Result<()> {
     let Some(t) = ctx.read_csv(FILE, HEADER)? else {
         return Ok(());
     };
@@ -289,20 +292,25 @@ fn every_row(t: &crate::Table) -> anyhow::Result<String> {
     Ok(markdown_table(&h, &rows))
 }
 
-/// The machine of the run in `manycore/` (its `machine.json`), in words.
-pub fn manycore_machine(ctx: &Ctx) -> String {
+/// The machine of the run in `manycore/` (its `machine.json`), in words, with the git revision
+/// and date of the run that wrote `experiment`'s results there (its entry under `runs`; the
+/// file's own, written by the last run, for results older than that record).
+pub fn manycore_machine(ctx: &Ctx, experiment: &str) -> String {
     let machine = std::fs::read_to_string(ctx.path(&format!("{MANYCORE}/machine.json")))
         .ok()
         .and_then(|text| serde_json::from_str::<serde_json::Value>(&text).ok());
     match &machine {
-        Some(m) => format!(
-            "{} with {} cores ({} hardware threads), git revision `{}`, {}",
-            m["cpu"].as_str().unwrap_or("?"),
-            m["cores"],
-            m["threads"],
-            m["git_rev"].as_str().unwrap_or("?"),
-            m["date"].as_str().unwrap_or("?"),
-        ),
+        Some(m) => {
+            let run = m["runs"].get(experiment).unwrap_or(m);
+            format!(
+                "{} with {} cores ({} hardware threads), git revision `{}`, {}",
+                m["cpu"].as_str().unwrap_or("?"),
+                m["cores"],
+                m["threads"],
+                run["git_rev"].as_str().unwrap_or("?"),
+                run["date"].as_str().unwrap_or("?"),
+            )
+        }
         None => "a machine whose `machine.json` is missing".to_owned(),
     }
 }
@@ -314,7 +322,7 @@ fn manycore_report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     let Some(t) = ctx.read_csv(&format!("{MANYCORE}/{FILE}"), HEADER)? else {
         return Ok(None);
     };
-    let about = manycore_machine(ctx);
+    let about = manycore_machine(ctx, "table5");
     let mut md = format!(
         "\n### On a machine with more cores\n\nThe same frames, backends and protocol on {about} \
          (`{MANYCORE}/`: its own [README]({MANYCORE}/README.md), `machine.json` and CSV). A \
@@ -386,8 +394,17 @@ mod tests {
         let md = report(&ctx).unwrap().unwrap();
         assert!(md.contains("### On a machine with more cores"), "{md}");
         assert!(
-            md.contains("Big CPU with 16 cores (32 hardware threads)"),
+            md.contains("Big CPU with 16 cores (32 hardware threads), git revision `abc`, d"),
             "{md}"
         );
+        // A later run of another experiment there: the rows keep their own run's revision.
+        std::fs::write(
+            ctx.path(&format!("{MANYCORE}/machine.json")),
+            r#"{"cpu": "Big CPU", "cores": 16, "threads": 32, "git_rev": "new", "date": "now",
+                "runs": {"table5": {"git_rev": "old", "date": "then"}}}"#,
+        )
+        .unwrap();
+        let md = report(&ctx).unwrap().unwrap();
+        assert!(md.contains("git revision `old`, then"), "{md}");
     }
 }
