@@ -49,6 +49,7 @@ use crate::ctx::Ctx;
 use crate::experiment::{Experiment, Status};
 use crate::plot::{BarChart, LineChart, Series};
 use crate::table::{fmt_num, markdown_table};
+use crate::table5::MANYCORE;
 use crate::timing::median;
 
 pub const EXPERIMENT: Experiment = Experiment {
@@ -1227,9 +1228,6 @@ fn compare_plots(ctx: &Ctx) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The comparison tables: the BSP against Embree per scene, ray kind and width with the
-/// targets, the cross-check, Embree's harness against a plain C-API loop, the native build
-/// beside the portable one, build time and memory.
 /// BSP / Embree per scene, ray kind and width, and BSP / obvhs single rays, each ratio below
 /// its target marked with `!`.
 fn ratio_table(rows: &Rows, scenes: &[String]) -> String {
@@ -1281,6 +1279,9 @@ fn ratio_table(rows: &Rows, scenes: &[String]) -> String {
     )
 }
 
+/// The comparison tables: the BSP against Embree per scene, ray kind and width with the
+/// targets, the cross-check, Embree's harness against a plain C-API loop, the native build
+/// beside the portable one, build time and memory, and a run on another machine.
 fn compare_report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     let Some((rows, scenes)) = read_rows(ctx)? else {
         return Ok(None);
@@ -1387,10 +1388,6 @@ fn embree_facts_of(ctx: &Ctx, file: &str) -> String {
     }
 }
 
-/// Where a run of this experiment on another machine lies, beside these results (as for
-/// `table5`: a machine lent for a session, its own `machine.json`, README and plots).
-const MANYCORE: &str = "manycore";
-
 /// The ratios of the same experiment run on another machine (`manycore/accel.csv`), and how
 /// Embree's rates through the harness compared with a plain C-API loop there.
 fn manycore_report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
@@ -1418,7 +1415,7 @@ fn manycore_report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
                 "\nEmbree through the harness over a plain C-API loop there \
                  (`{MANYCORE}/accel_embree.csv`, {} rows): median {:.3}, range {lo:.3}-{hi:.3}.\n",
                 ratios.len(),
-                ratios[ratios.len() / 2],
+                median(&ratios),
             ));
         }
     }

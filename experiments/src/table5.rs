@@ -48,8 +48,9 @@ fn rounds_for(seconds: f64) -> usize {
     let n = (TIMED_SECONDS / seconds.max(1e-6)).ceil();
     (n.min(MAX_ROUNDS as f64) as usize).max(MIN_ROUNDS)
 }
-/// The folder, beside these results, of a run on a machine with more cores.
-const MANYCORE: &str = "manycore";
+/// The folder, beside these results, of a run on a machine with more cores (its own
+/// `machine.json`, README, CSV files and plots); the `accel` report reads its run there too.
+pub(crate) const MANYCORE: &str = "manycore";
 /// The contract's columns, then the lanes of the backend.
 const HEADER: &[&str] = &["scene", "backend", "threads", "seconds", "speedup", "lanes"];
 
