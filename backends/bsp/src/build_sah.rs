@@ -11,7 +11,7 @@ use coherent_accel::Aabb;
 use glam::Vec3;
 
 use crate::clip::clipped_bounds;
-use crate::{KdTree, MAX_INDEX, Node, SahParams, TreeStats};
+use crate::{KdTree, MAX_CHILD, MAX_INDEX, Node, SahParams, TreeStats};
 
 /// Event kinds, in their sort order at equal positions: ends before planars before starts.
 const END: u64 = 0;
@@ -117,12 +117,14 @@ pub fn build_sah(tris: &[[Vec3; 3]], p: &SahParams) -> KdTree {
     b.build(0, bounds, ev, n, 0);
     let mut stats = b.stats;
     stats.build_seconds = t0.elapsed().as_secs_f64();
-    KdTree {
+    let mut tree = KdTree {
         nodes: b.nodes,
         items: b.items,
         bounds,
         stats,
-    }
+    };
+    tree.mark_empty_children();
+    tree
 }
 
 impl Builder<'_> {
@@ -199,7 +201,7 @@ impl Builder<'_> {
         self.give(new_l);
         self.give(new_r);
         let children = self.nodes.len();
-        assert!(children < MAX_INDEX, "kd-tree too large");
+        assert!(children < MAX_CHILD, "kd-tree too large");
         self.nodes.push(Node::leaf(0, 0));
         self.nodes.push(Node::leaf(0, 0));
         self.nodes[node] = Node::inner(k, pos, children);
@@ -399,7 +401,8 @@ mod tests {
         );
     }
 
-    /// Every triangle whose part in a leaf's voxel is non-empty is in that leaf.
+    /// Every triangle whose part in a leaf's voxel is non-empty is in that leaf, and every
+    /// inner node marks exactly its children that are empty leaves.
     #[test]
     fn leaves_hold_every_triangle_that_reaches_them() {
         let mut s = 7u64;
@@ -417,7 +420,7 @@ mod tests {
             .collect();
         for p in [SahParams::fast(), SahParams::default(), SahParams::slow()] {
             let t = build_sah(&tris, &p);
-            assert!(t.stats.leaves > 10, "{:?}", t.stats);
+            assert!(t.stats.leaves > 10 && t.stats.empty_leaves > 0, "{:?}", t.stats);
             // Walk the tree, keeping voxels.
             let mut todo = vec![(0usize, t.bounds)];
             while let Some((i, v)) = todo.pop() {
@@ -433,6 +436,12 @@ mod tests {
                         }
                     }
                 } else {
+                    let empty = |c: usize| {
+                        let c = t.nodes[c];
+                        c.is_leaf() && c.items().is_empty()
+                    };
+                    let bits = empty(n.left()) as u32 | (empty(n.left() + 1) as u32) << 1;
+                    assert_eq!(n.empty_children(), bits, "node {i}");
                     let (k, s) = (n.axis(), n.split());
                     let (mut l, mut r) = (v, v);
                     l.max[k] = s;

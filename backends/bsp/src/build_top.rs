@@ -4,7 +4,7 @@
 
 use coherent_accel::Aabb;
 
-use crate::{KdTree, Node, TopParams, TreeStats};
+use crate::{KdTree, MAX_CHILD, Node, TopParams, TreeStats};
 
 /// Builds the kd-tree over `boxes` (one per instance; empty boxes are left out). Leaf items
 /// are indices into `boxes`.
@@ -40,12 +40,14 @@ pub fn build_top(boxes: &[Aabb], p: &TopParams) -> KdTree {
     b.build(0, bounds, 0..n, 0);
     let mut stats = b.stats;
     stats.build_seconds = t0.elapsed().as_secs_f64();
-    KdTree {
+    let mut tree = KdTree {
         nodes: b.nodes,
         items: b.items,
         bounds,
         stats,
-    }
+    };
+    tree.mark_empty_children();
+    tree
 }
 
 struct TopBuilder<'a> {
@@ -114,6 +116,7 @@ impl TopBuilder<'_> {
         vl.max[k] = pos;
         vr.min[k] = pos;
         let children = self.nodes.len();
+        assert!(children < MAX_CHILD, "top-level kd-tree too large");
         self.nodes.push(Node::leaf(0, 0));
         self.nodes.push(Node::leaf(0, 0));
         self.nodes[node] = Node::inner(k, pos, children);

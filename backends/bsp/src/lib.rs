@@ -36,6 +36,6 @@ pub use build_top::build_top;
 pub use clip::clipped_bounds;
 pub use counters::TraversalStats;
 pub use leaf4::{Leaves4, Tri4};
-pub use node::{MAX_INDEX, Node};
+pub use node::{MAX_CHILD, MAX_INDEX, Node};
 pub use params::{BspParams, MAX_TREE_DEPTH, SahParams, TopParams, default_single_ray_threshold};
 pub use tree::{KdTree, TreeStats};

@@ -47,6 +47,23 @@ impl KdTree {
         }
     }
 
+    /// Sets every inner node's [`Node::empty_children`] from its children. Most leaves a ray
+    /// crosses hold nothing (the SAH cuts empty space off): on the full `blob`, 6 of the 8
+    /// leaves a single shadow or diffuse ray visits, 4.1 of a primary ray's 4.7. With the
+    /// bits, a walk skips them at their parent (no load, no stack entry). Both builders call
+    /// this last.
+    pub fn mark_empty_children(&mut self) {
+        let empty = |n: Node| n.is_leaf() && n.items().is_empty();
+        for i in 0..self.nodes.len() {
+            let n = self.nodes[i];
+            if n.is_leaf() {
+                continue;
+            }
+            let (l, r) = (self.nodes[n.left()], self.nodes[n.left() + 1]);
+            self.nodes[i] = n.with_empty_children(empty(l) as u32 | (empty(r) as u32) << 1);
+        }
+    }
+
     pub fn memory_bytes(&self) -> usize {
         self.nodes.len() * size_of::<Node>() + self.items.len() * size_of::<u32>()
     }

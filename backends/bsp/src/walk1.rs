@@ -121,20 +121,38 @@ pub(crate) fn walk1<S, C: Counters>(
             let sb = (r.neg >> k & 1) as usize;
             let near = n.left() + sb;
             let far = n.left() + 1 - sb;
+            // Children that are empty leaves are never entered (`Node::empty_children`).
+            let empty = n.empty_children();
+            let near_empty = empty >> sb & 1 != 0;
+            let far_empty = empty >> (sb ^ 1) & 1 != 0;
             if ts > tf {
-                node = near;
+                if !near_empty {
+                    node = near;
+                    continue;
+                }
             } else if ts < tn {
-                node = far;
-            } else {
-                stack.push((far as u32, widen_lo(max1(ts, tn)), tf));
+                if !far_empty {
+                    node = far;
+                    continue;
+                }
+            } else if !near_empty {
+                if !far_empty {
+                    stack.push((far as u32, widen_lo(max1(ts, tn)), tf));
+                }
                 node = near;
                 tf = widen_hi(min1(ts, tf));
+                continue;
+            } else if !far_empty {
+                node = far;
+                tn = widen_lo(max1(ts, tn));
+                continue;
             }
-            continue;
-        }
-        c.leaf();
-        if leaf(s, c, node, &tree.items[n.items()]) {
-            return true;
+            // Every child the segment reaches is empty.
+        } else {
+            c.leaf();
+            if leaf(s, c, node, &tree.items[n.items()]) {
+                return true;
+            }
         }
         loop {
             let Some((next, a, b)) = stack.pop() else {
