@@ -4,9 +4,9 @@
 /// A kd-tree node (8 bytes).
 ///
 /// `word` bits 0-1: the split axis (0, 1, 2) of an inner node, or 3 for a leaf. For an inner
-/// node, bits 2 and 3 are set when its left or right child is an empty leaf (so that a walk
-/// skips that child without loading it: most leaves a ray crosses are empty, see
-/// [`crate::KdTree::mark_empty_children`]) and bits 4-31 hold the index of its left child
+/// node, bits 2 and 3 are set when its left or right child is an empty leaf (so that the
+/// single-ray walk skips that child without loading it: most leaves a ray crosses are empty,
+/// see [`crate::KdTree::mark_empty_children`]) and bits 4-31 hold the index of its left child
 /// (the right child follows it); for a leaf, bits 2-31 hold the index of its first item in
 /// the tree's item list. `data`: the split position's bits (inner) or the number of items
 /// (leaf).

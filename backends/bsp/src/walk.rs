@@ -232,75 +232,66 @@ pub(crate) fn walk<L: Lanes, S, C: Counters>(
                 let far = n.left() + 1 - sb;
                 // Lanes that reach the near child (not `ts < tn`) and the far child (not
                 // `ts > tf`); NaN lanes reach both.
-                let mut go_near = m.and_not(ts.lt(tn));
-                let mut go_far = m.and_not(ts.gt(tf));
-                let mixed = r.mixed >> k & 1 != 0;
-                if mixed {
+                let go_near = m.and_not(ts.lt(tn));
+                let go_far = m.and_not(ts.gt(tf));
+                if r.mixed >> k & 1 != 0 {
                     // Lanes of mixed signs along `k`: for the minority (`minor[k]`), the
                     // group's near child is their far one. A step of its own, apart from the
-                    // plain one, so that packets of equal signs pay only this test (a bit
+                    // one below, so that packets of equal signs pay only this test (a bit
                     // that changes with the node's axis: the compiler does not copy the
                     // whole walk for it, as it would for a per-packet flag).
                     let mi = r.minor[k];
                     let flip = (go_near ^ go_far) & mi;
-                    (go_near, go_far) = (go_near ^ flip, go_far ^ flip);
-                }
-                // Children that are empty leaves are never entered (`Node::empty_children`).
-                let empty = n.empty_children();
-                let near_empty = empty >> sb & 1 != 0;
-                let far_empty = empty >> (sb ^ 1) & 1 != 0;
-                if go_far.none() {
-                    if near_empty {
-                        break;
-                    }
-                    node = near;
-                    continue;
-                }
-                if go_near.none() {
-                    if far_empty {
-                        break;
-                    }
-                    node = far;
-                    continue;
-                }
-                // Lanes on both sides: the far child waits on the stack, unless one of the two
-                // is empty; whichever is entered, only its lanes and segments go on.
-                let near_tf = widen_hi(l, ts.min(tf));
-                let far_tn = widen_lo(l, ts.max(tn));
-                let (near_seg, far_seg) = if mixed {
-                    let mi = r.minor[k];
-                    (
-                        (mi.select(far_tn, tn), mi.select(tf, near_tf)),
-                        (mi.select(tn, far_tn), mi.select(near_tf, tf)),
-                    )
-                } else {
-                    ((tn, near_tf), (far_tn, tf))
-                };
-                if near_empty {
-                    if far_empty {
-                        break;
-                    }
-                    node = far;
-                    ((tn, tf), m) = (far_seg, go_far);
-                } else {
-                    if !far_empty {
+                    let (go_near, go_far) = (go_near ^ flip, go_far ^ flip);
+                    if go_far.none() {
+                        node = near;
+                    } else if go_near.none() {
+                        node = far;
+                    } else {
+                        let near_tf = widen_hi(l, ts.min(tf));
+                        let far_tn = widen_lo(l, ts.max(tn));
                         stack.push(Entry {
                             node: far as u32,
-                            tn: far_seg.0,
-                            tf: far_seg.1,
+                            tn: mi.select(tn, far_tn),
+                            tf: mi.select(near_tf, tf),
                             m: go_far,
                         });
+                        node = near;
+                        (tn, tf) = (mi.select(far_tn, tn), mi.select(tf, near_tf));
+                        m = go_near;
+                        if m.count() <= thr {
+                            c.handoff(m.count());
+                            single(s, c, node, m, tn, tf);
+                            if done(s) {
+                                return;
+                            }
+                            break;
+                        }
                     }
-                    node = near;
-                    ((tn, tf), m) = (near_seg, go_near);
+                    continue;
                 }
-                if m.count() <= thr {
-                    c.handoff(m.count());
-                    single(s, c, node, m, tn, tf);
-                    if done(s) {
-                        return;
+                if go_far.none() {
+                    node = near;
+                } else if go_near.none() {
+                    node = far;
+                } else {
+                    stack.push(Entry {
+                        node: far as u32,
+                        tn: widen_lo(l, ts.max(tn)),
+                        tf,
+                        m: go_far,
+                    });
+                    node = near;
+                    tf = widen_hi(l, ts.min(tf));
+                    m = go_near;
+                    if m.count() <= thr {
+                        c.handoff(m.count());
+                        single(s, c, node, m, tn, tf);
+                        if done(s) {
+                            return;
+                        }
+                        break;
                     }
-                    break;
                 }
             }
         }
