@@ -420,7 +420,11 @@ mod tests {
             .collect();
         for p in [SahParams::fast(), SahParams::default(), SahParams::slow()] {
             let t = build_sah(&tris, &p);
-            assert!(t.stats.leaves > 10 && t.stats.empty_leaves > 0, "{:?}", t.stats);
+            assert!(
+                t.stats.leaves > 10 && t.stats.empty_leaves > 0,
+                "{:?}",
+                t.stats
+            );
             // Walk the tree, keeping voxels.
             let mut todo = vec![(0usize, t.bounds)];
             while let Some((i, v)) = todo.pop() {
