@@ -95,7 +95,8 @@ pub(crate) fn min1(a: f32, b: f32) -> f32 {
 ///
 /// At a split with `ts = (split - o) / d`: the near child alone when `ts > tf`, the far one
 /// alone when `ts < tn`, else both. A NaN `ts` (a ray lying in the split plane) visits both
-/// with the whole segment.
+/// with the whole segment. A child that is an empty leaf is neither entered nor stacked
+/// ([`crate::Node::empty_children`]), so `leaf` sees empty leaves only as `start`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn walk1<S, C: Counters>(
