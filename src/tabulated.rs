@@ -81,23 +81,12 @@ pub struct Axis {
     node_invs: Vec<f32>,
     /// The sequence of step sizes of the fixed-length binary search.
     halves: Vec<i32>,
-}
-
-/// `table[at[0]]` where both masks are on, `at[1]` where only `first`, `at[2]` where only
-/// `second`, `at[3]` where neither: one of four splatted values per lane by two levels of
-/// selects (a plain function, not a closure, so that it inlines into every kernel).
-#[inline(always)]
-fn pick4<L: Lanes>(l: L, first: L::Mask, second: L::Mask, table: &[f32], at: [i32; 4]) -> L::F32s {
-    first.select(
-        second.select(
-            l.splat(table[at[0] as usize]),
-            l.splat(table[at[1] as usize]),
-        ),
-        second.select(
-            l.splat(table[at[2] as usize]),
-            l.splat(table[at[3] as usize]),
-        ),
-    )
+    /// The eight nodes the fourth step may probe (of axes searched in four steps or more),
+    /// by the first three outcomes: entry `4 a + 2 b + c` follows outcomes `a`, `b`, `c`
+    /// (1 = moved up). Zero for shorter axes.
+    fourth_nodes: [f32; 8],
+    /// The reciprocal widths of the cells above `fourth_nodes`.
+    fourth_invs: [f32; 8],
 }
 
 impl Axis {
@@ -156,11 +145,21 @@ impl Axis {
             .zip(&inv_widths)
             .flat_map(|(&n, &inv)| [n, inv])
             .collect();
+        let (mut fourth_nodes, mut fourth_invs) = ([0.0; 8], [0.0; 8]);
+        if let [h0, h1, h2, h3, ..] = halves[..] {
+            for (i, (node, inv)) in fourth_nodes.iter_mut().zip(&mut fourth_invs).enumerate() {
+                let up = |bit: usize, h: i32| if i >> bit & 1 == 1 { h } else { 0 };
+                let probe = (up(2, h0) + up(1, h1) + up(0, h2) + h3) as usize;
+                (*node, *inv) = (nodes[probe], inv_widths[probe]);
+            }
+        }
         Ok(Self {
             nodes,
             inv_widths,
             node_invs,
             halves,
+            fourth_nodes,
+            fourth_invs,
         })
     }
 
@@ -241,40 +240,20 @@ impl Axis {
                     hit1.select(w(h[0] + h[1] + h[2]), w(h[0] + h[2])),
                     hit1.select(w(h[1] + h[2]), w(h[2])),
                 );
-                // 16-lane packets: level 4 by selects too. Its eight candidates are picked
-                // by the first two outcomes for either third one before level 3's outcome
-                // is known, so only the last select waits for it (a gather waits for it and
-                // then for memory). Measured (`kernels`, BDF, Zen 4): pulp16, whose gathers
-                // go lane by lane, 7.3x -> 7.7-8.4x over scalar; avx512 (a two-register
-                // permute) unchanged; at 8 lanes avx2 +2% and pulp8 -3%, so they gather.
-                let four = if L::N >= 16 && h.len() > 3 {
-                    let h3 = h[3];
-                    // The candidates for either third outcome (`up`: moved by `h[2]`).
-                    let [h0, h1, h2] = [h[0], h[1], h[2]];
-                    let up = [h0 + h1 + h2 + h3, h0 + h2 + h3, h1 + h2 + h3, h2 + h3];
-                    let down = [h0 + h1 + h3, h0 + h3, h1 + h3, h3];
-                    let nodes = (
-                        pick4(l, hit0, hit1, &self.nodes, up),
-                        pick4(l, hit0, hit1, &self.nodes, down),
-                    );
-                    let widths = (
-                        pick4(l, hit0, hit1, &self.inv_widths, up),
-                        pick4(l, hit0, hit1, &self.inv_widths, down),
-                    );
-                    Some((h3, nodes, widths))
-                } else {
-                    None
-                };
                 let hit2 = probe.le(x);
                 base = hit2.select_i32(base + l.splat_i32(h[2]), base);
                 lower = hit2.select(probe, lower);
                 inv = hit2.select(probe_inv, inv);
                 let mut rest = &h[3..];
-                if let Some((h3, (n_up, n_down), (w_up, w_down))) = four {
-                    let probe = hit2.select(n_up, n_down);
-                    let probe_inv = hit2.select(w_up, w_down);
+                // Packets of 8 and 16: level 4 from its eight candidates by the three
+                // outcomes (`Lanes::pick8`: selects, or a lane permute where the backend has
+                // one), not by a gather, which waits for level 3's outcome and then for
+                // memory. Measured in `reproduce --only kernels` (BDF, Zen 4): see README.
+                if L::N >= 8 && h.len() > 3 {
+                    let probe = l.pick8(&self.fourth_nodes, hit0, hit1, hit2);
+                    let probe_inv = l.pick8(&self.fourth_invs, hit0, hit1, hit2);
                     let hit3 = probe.le(x);
-                    base = hit3.select_i32(base + l.splat_i32(h3), base);
+                    base = hit3.select_i32(base + l.splat_i32(h[3]), base);
                     lower = hit3.select(probe, lower);
                     inv = hit3.select(probe_inv, inv);
                     rest = &h[4..];
@@ -494,8 +473,12 @@ impl<const D: usize> Grid<D> {
         let cap = L::N / 4 + 1;
         let mut bases = [0usize; 16];
         let mut masks = [l.splat_mask(false); 16];
-        let mut cells_seen = 0;
-        let mut todo = l.splat_mask(true);
+        // The first cell is lane 0's: a fixed lane, read without a search.
+        let first = base.lane(0);
+        masks[0] = base.eq(l.splat_i32(first));
+        bases[0] = first as usize;
+        let mut cells_seen = 1;
+        let mut todo = !masks[0];
         while todo.any() && cells_seen < cap.min(16) {
             let b = base.lane(todo.bitmask().trailing_zeros() as usize);
             let mine = base.eq(l.splat_i32(b));

@@ -154,6 +154,13 @@ impl Kernel for Ops<'_> {
             push("gather2_near_short_lo", fb(lo));
             push("gather2_near_short_hi", fb(hi));
 
+            // One of eight values by three masks (a lane permute on avx2 and avx512).
+            let mut eight = [0.0f32; 8];
+            for (k, e) in eight.iter_mut().enumerate() {
+                *e = inp.c[k] + k as f32;
+            }
+            push("pick8", fb(l.pick8(&eight, m, m2, b.lt(c))));
+
             // Stores, masked stores and round trips through slices.
             let mut buf = inp.c;
             a.store_masked(m, &mut buf[p..]);
@@ -427,6 +434,44 @@ backend_tests!(
     pulp8 => Backend::Pulp8,
     pulp16 => Backend::Pulp16,
 );
+
+/// `pick8` by every combination of three masks, lanes mixed, on one backend: lane `i`
+/// takes entry `4 first + 2 second + third` of the table.
+struct Pick8;
+
+impl Kernel for Pick8 {
+    type Output = ();
+    fn run<L: Lanes>(self, l: L) {
+        let table = [0.5f32, -1.0, 2.25, f32::INFINITY, -0.0, 7.0, f32::MIN_POSITIVE, 3e9];
+        for bits in 0..1u32 << 12 {
+            // Three masks of up to 16 lanes from the low bits, spread over the lanes.
+            let spread = |shift: u32| (bits >> shift & 0xf).wrapping_mul(0x1111);
+            let (f, s, t) = (spread(0), spread(4), spread(8));
+            let got = l.pick8(
+                &table,
+                l.mask_from_bits(f),
+                l.mask_from_bits(s),
+                l.mask_from_bits(t),
+            );
+            for i in 0..L::N {
+                let at = 4 * (f >> i & 1) + 2 * (s >> i & 1) + (t >> i & 1);
+                assert_eq!(
+                    got.lane(i).to_bits(),
+                    table[at as usize].to_bits(),
+                    "lane {i} of {}-lane pick8, masks {f:#x} {s:#x} {t:#x}",
+                    L::N
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn pick8_picks_by_the_three_masks() {
+    for backend in Backend::usable() {
+        backend.run(Pick8).unwrap();
+    }
+}
 
 /// One gather with lane `bad` (of the first `L::N`) set to `index`, the others in range.
 struct BadGather {

@@ -1,5 +1,5 @@
 //! Times Table 1's BDF workload on one backend, for `perf stat` (task-clock) comparisons:
-//! `bdf_calls <backend> <calls>`; prints the backend, calls and seconds per call.
+//! `bdf_calls <backend> <calls> [image size, 512]`; prints the backend, calls and seconds per call.
 
 use std::time::Instant;
 
@@ -24,7 +24,12 @@ fn main() -> anyhow::Result<()> {
         PAPER_ANISOTROPIC_SHAPE,
         Symmetry::Quadrant,
     )?;
-    let inputs = BdfInputs::sphere(512);
+    let size: usize = args
+        .get(3)
+        .map(|s| s.parse())
+        .transpose()?
+        .unwrap_or(512);
+    let inputs = BdfInputs::sphere(size);
     let start = Instant::now();
     let sum = backend.run(BdfCalls {
         bdf: &bdf,

@@ -146,6 +146,24 @@ impl Lanes for Avx2 {
         F32x8(unsafe { _mm256_i32gather_ps::<4>(table.as_ptr(), idx.0) })
     }
     #[inline(always)]
+    fn pick8(self, table: &[f32; 8], first: M32x8, second: M32x8, third: M32x8) -> F32x8 {
+        // Each lane's even index `4 first + 2 second` and its odd neighbour, permuted from
+        // the table in a register; only the blend waits for `third`.
+        // SAFETY: the token proves AVX2; `vpermps` reads no memory (each index's low three
+        // bits pick a lane of the loaded table).
+        unsafe {
+            let t = _mm256_loadu_ps(table.as_ptr());
+            let even = _mm256_or_si256(
+                _mm256_and_si256(_mm256_castps_si256(first.0), _mm256_set1_epi32(4)),
+                _mm256_and_si256(_mm256_castps_si256(second.0), _mm256_set1_epi32(2)),
+            );
+            let odd = _mm256_or_si256(even, _mm256_set1_epi32(1));
+            let down = _mm256_permutevar8x32_ps(t, even);
+            let up = _mm256_permutevar8x32_ps(t, odd);
+            F32x8(_mm256_blendv_ps(down, up, third.0))
+        }
+    }
+    #[inline(always)]
     fn gather_u32(self, table: &[u32], idx: I32x8) -> I32x8 {
         let ok = in_range8(idx, table.len());
         if !ok {

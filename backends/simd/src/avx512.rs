@@ -139,6 +139,24 @@ impl Lanes for Avx512 {
         F32x16(unsafe { _mm512_i32gather_ps::<4>(idx.0, table.as_ptr()) })
     }
     #[inline(always)]
+    fn pick8(self, table: &[f32; 8], first: M16, second: M16, third: M16) -> F32x16 {
+        // Each lane's even index `4 first + 2 second` and its odd neighbour, permuted from
+        // the table in both halves of a register; only the blend waits for `third`.
+        // SAFETY: the token proves AVX-512 F/DQ; `vpermps` reads no memory (each index's
+        // low four bits pick a lane, and both halves hold the table).
+        unsafe {
+            let t = _mm512_broadcast_f32x8(_mm256_loadu_ps(table.as_ptr()));
+            let even = _mm512_or_si512(
+                _mm512_maskz_set1_epi32(first.0, 4),
+                _mm512_maskz_set1_epi32(second.0, 2),
+            );
+            let odd = _mm512_or_si512(even, _mm512_set1_epi32(1));
+            let down = _mm512_permutexvar_ps(even, t);
+            let up = _mm512_permutexvar_ps(odd, t);
+            F32x16(_mm512_mask_blend_ps(third.0, down, up))
+        }
+    }
+    #[inline(always)]
     fn gather_u32(self, table: &[u32], idx: I32x16) -> I32x16 {
         let ok = in_range16(idx, table.len());
         if !ok {

@@ -92,6 +92,31 @@ pub trait Lanes: Copy + Debug + Send + Sync + 'static {
         self.gather2(table, idx)
     }
 
+    /// `table[i]` per lane, where bit 2 of `i` is `first`, bit 1 is `second` and bit 0 is
+    /// `third` (a lane on = 1): one of eight values by three masks, as a step of a binary
+    /// search picks the node it probes from the outcomes of the three steps before. Here
+    /// by selects, both halves picked by `first` and `second` so that only the last select
+    /// waits for `third`; backends with a lane permute (`avx2`, `avx512`) permute instead.
+    #[inline(always)]
+    fn pick8(
+        self,
+        table: &[f32; 8],
+        first: Self::Mask,
+        second: Self::Mask,
+        third: Self::Mask,
+    ) -> Self::F32s {
+        // Written out, no closure: it must inline into the backends' entry points.
+        let up = first.select(
+            second.select(self.splat(table[7]), self.splat(table[5])),
+            second.select(self.splat(table[3]), self.splat(table[1])),
+        );
+        let down = first.select(
+            second.select(self.splat(table[6]), self.splat(table[4])),
+            second.select(self.splat(table[2]), self.splat(table[0])),
+        );
+        third.select(up, down)
+    }
+
     /// Lanes from a function of the lane index (packing, tests; not for hot loops).
     #[inline(always)]
     #[allow(clippy::wrong_self_convention)] // a token method: the token proves the backend
