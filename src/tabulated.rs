@@ -489,6 +489,13 @@ impl<const D: usize> Grid<D> {
             cells_seen += 1;
         }
         let splat = todo.none();
+        // Offsets of each pair of neighbouring corners from the lower corner; the last
+        // pair's end is the span of a cell's nodes.
+        let mut pair_offsets = [0usize; 8];
+        for pair in 0..1 << (D - 1) {
+            pair_offsets[pair] = self.corner_offsets[2 * pair] as usize;
+        }
+        let span = pair_offsets[(1 << (D - 1)) - 1] + 2;
         let one = l.splat(1.0);
         let channels = out.len().min(self.channels);
         for c in 0..channels {
@@ -498,20 +505,22 @@ impl<const D: usize> Grid<D> {
             // one read serves both).
             let mut v = [l.splat(0.0); 16];
             if splat {
+                // Cell by cell: each cell's nodes as one slice (one range check instead of
+                // one per pair), each later cell's mask held over all its pairs.
+                let cell = &plane[bases[0]..bases[0] + span];
                 for pair in 0..1 << (D - 1) {
-                    let off = self.corner_offsets[2 * pair] as usize;
-                    let at = bases[0] + off;
-                    let block = &plane[at..at + 2];
-                    let mut lo = l.splat(block[0]);
-                    let mut hi = l.splat(block[1]);
-                    for j in 1..cells_seen {
-                        let at = bases[j] + off;
-                        let block = &plane[at..at + 2];
-                        lo = masks[j].select(l.splat(block[0]), lo);
-                        hi = masks[j].select(l.splat(block[1]), hi);
+                    let off = pair_offsets[pair];
+                    v[2 * pair] = l.splat(cell[off]);
+                    v[2 * pair + 1] = l.splat(cell[off + 1]);
+                }
+                for j in 1..cells_seen {
+                    let cell = &plane[bases[j]..bases[j] + span];
+                    let mine = masks[j];
+                    for pair in 0..1 << (D - 1) {
+                        let off = pair_offsets[pair];
+                        v[2 * pair] = mine.select(l.splat(cell[off]), v[2 * pair]);
+                        v[2 * pair + 1] = mine.select(l.splat(cell[off + 1]), v[2 * pair + 1]);
                     }
-                    v[2 * pair] = lo;
-                    v[2 * pair + 1] = hi;
                 }
             } else {
                 for pair in 0..1 << (D - 1) {
