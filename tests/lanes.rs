@@ -442,7 +442,16 @@ struct Pick8;
 impl Kernel for Pick8 {
     type Output = ();
     fn run<L: Lanes>(self, l: L) {
-        let table = [0.5f32, -1.0, 2.25, f32::INFINITY, -0.0, 7.0, f32::MIN_POSITIVE, 3e9];
+        let table = [
+            0.5f32,
+            -1.0,
+            2.25,
+            f32::INFINITY,
+            -0.0,
+            7.0,
+            f32::MIN_POSITIVE,
+            3e9,
+        ];
         for bits in 0..1u32 << 12 {
             // Three masks of up to 16 lanes from the low bits, spread over the lanes.
             let spread = |shift: u32| (bits >> shift & 0xf).wrapping_mul(0x1111);

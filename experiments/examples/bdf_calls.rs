@@ -24,11 +24,7 @@ fn main() -> anyhow::Result<()> {
         PAPER_ANISOTROPIC_SHAPE,
         Symmetry::Quadrant,
     )?;
-    let size: usize = args
-        .get(3)
-        .map(|s| s.parse())
-        .transpose()?
-        .unwrap_or(512);
+    let size: usize = args.get(3).map(|s| s.parse()).transpose()?.unwrap_or(512);
     let inputs = BdfInputs::sphere(size);
     let start = Instant::now();
     let sum = backend.run(BdfCalls {
