@@ -506,8 +506,8 @@ impl<const D: usize> Grid<D> {
             let mut v = [l.splat(0.0); 16];
             if splat && L::N == 1 {
                 // One lane (the scalar baseline): its cell's nodes as one slice, one range
-                // check instead of one per pair (10-12% faster there; as the packets' code
-                // below, it made sse and pulp 5-8% slower: see README).
+                // check instead of one per pair (10-12% faster there; used for packets too,
+                // it made sse and pulp 5-8% slower: see README).
                 let cell = &plane[bases[0]..bases[0] + span];
                 for pair in 0..1 << (D - 1) {
                     let off = pair_offsets[pair];
