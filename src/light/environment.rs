@@ -2,8 +2,9 @@
 //! radiance map, read from OpenEXR, around the scene. It is a light with a fixed number
 //! of samples per shading point, each drawn by importance from a 2D distribution over the
 //! map (a marginal distribution over rows and one conditional per row, texel weights =
-//! luminance times `sin(theta)`), found per lane by a fixed-length branch-free binary
-//! search over the cumulative tables. Rays that miss everything see the map
+//! luminance times `sin(theta)`), found per lane from a guide table of each cumulative
+//! table and a binary search inside the guide's bounds ([`Environment::search`]). Rays
+//! that miss everything see the map
 //! ([`Environment::radiance`], nearest texel, the same piecewise-constant map the sampling
 //! assumes).
 //!
@@ -50,9 +51,12 @@ struct Map {
     conditional: Vec<f32>,
     /// Density per texel over the unit square of map coordinates.
     pdf: Vec<f32>,
-    /// Step sizes of the fixed-length searches over rows and columns.
-    row_halves: Vec<i32>,
-    col_halves: Vec<i32>,
+    /// Guide tables of the marginal CDF (`row_buckets + 1` entries) and of each row's
+    /// conditional CDF (`h` runs of `col_buckets + 1`): see [`guide`].
+    marginal_guide: Vec<u32>,
+    conditional_guide: Vec<u32>,
+    row_buckets: usize,
+    col_buckets: usize,
 }
 
 /// An HDR latitude-longitude map as a light.
@@ -82,16 +86,28 @@ pub fn strata_grid(samples: u32) -> [u32; 2] {
     [columns, samples / columns]
 }
 
-/// The search step sizes for `n` cells.
-fn halves(n: usize) -> Vec<i32> {
-    let mut v = Vec::new();
-    let mut n = n;
-    while n > 1 {
-        let half = n / 2;
-        v.push(half as i32);
-        n -= half;
+/// The guide table (Chen and Asau's cutpoints) of a CDF of `n + 1` values over `n` cells:
+/// `buckets + 1` entries, entry `g` the largest cell `j` in `0..n` with `cdf[j] <= g /
+/// buckets`. A number `u` in bucket `g = floor(u buckets)` has its cell between entries `g`
+/// and `g + 1`. `buckets` is a power of two, so that `g / buckets` and `u * buckets` are
+/// exact in `f32` and the bucket of `u` is never off by one.
+fn guide(cdf: &[f32], buckets: usize, out: &mut Vec<u32>) {
+    debug_assert!(buckets.is_power_of_two() && cdf.len() >= 2);
+    let n = cdf.len() - 1;
+    let mut j = 0;
+    for g in 0..=buckets {
+        let x = g as f32 / buckets as f32;
+        while j + 1 < n && cdf[j + 1] <= x {
+            j += 1;
+        }
+        out.push(j as u32);
     }
-    v
+}
+
+/// Guide buckets for `n` cells: the power of two at least `2 n` (at most one or two cells
+/// per bucket where the weights are even).
+fn buckets(n: usize) -> usize {
+    (2 * n).next_power_of_two()
 }
 
 /// Turns weights into a CDF (`len + 1` values from 0 to 1); all-zero weights give a
@@ -197,6 +213,13 @@ impl Environment {
         }
         let mut marginal = Vec::with_capacity(h + 1);
         cdf(&row_sums, &mut marginal);
+        let (row_buckets, col_buckets) = (buckets(h), buckets(w));
+        let mut marginal_guide = Vec::with_capacity(row_buckets + 1);
+        guide(&marginal, row_buckets, &mut marginal_guide);
+        let mut conditional_guide = Vec::with_capacity(h * (col_buckets + 1));
+        for row in conditional.chunks_exact(w + 1) {
+            guide(row, col_buckets, &mut conditional_guide);
+        }
         // Density over the unit square: the probability of the texel (product of its row's
         // and its column's CDF steps, as sampled) times w h.
         let mut pdf = vec![0.0f32; w * h];
@@ -215,8 +238,10 @@ impl Environment {
                 marginal,
                 conditional,
                 pdf,
-                row_halves: halves(h),
-                col_halves: halves(w),
+                marginal_guide,
+                conditional_guide,
+                row_buckets,
+                col_buckets,
             }),
             axes: [ex, ey, ez],
             scale,
@@ -295,16 +320,35 @@ impl Environment {
         self
     }
 
-    /// The largest `j` in `0..halves' cells` with `cdf[offset + j] <= u`, per lane.
+    /// The largest cell `j` with `cdf[offset + j] <= u` per lane (`u` in `[0, 1)`), the
+    /// search started from the CDF's guide table (`guide[goffset..]`, `buckets` buckets):
+    /// the bucket of `u` bounds the cell from both sides, and a binary search closes the
+    /// bounds, as long as any lane of the packet has two or more cells left (none, for
+    /// most lanes of a smooth map; a few steps in the dark parts of a map with a sun). The
+    /// cell is the one a binary search over the whole CDF finds.
     #[inline(always)]
-    fn search<L: Lanes>(l: L, cdf: &[f32], offset: L::I32s, halves: &[i32], u: L::F32s) -> L::I32s {
-        let mut base = l.splat_i32(0);
-        for &half in halves {
-            let probe = base + l.splat_i32(half);
-            let hit = l.gather(cdf, offset + probe).le(u);
-            base = hit.select_i32(probe, base);
+    fn search<L: Lanes>(
+        l: L,
+        cdf: &[f32],
+        offset: L::I32s,
+        guide: &[u32],
+        goffset: L::I32s,
+        buckets: usize,
+        u: L::F32s,
+    ) -> L::I32s {
+        let at = goffset + (u * buckets as f32).to_i32();
+        let mut lo = l.gather_u32(guide, at);
+        let mut hi = l.gather_u32(&guide[1..], at);
+        let one = l.splat_i32(1);
+        // Each step leaves `lo` (whose value is at most `u`) or lowers `hi` below the
+        // midpoint, so the bounds meet; lanes whose bounds met stay as they are.
+        while hi.gt(lo).any() {
+            let mid = (lo + hi + one).shr_logical(1);
+            let below = l.gather(cdf, offset + mid).le(u);
+            lo = below.select_i32(mid, lo);
+            hi = below.select_i32(hi, mid - one);
         }
-        base
+        lo
     }
 
     /// The texel index (`j * w + i`) of map coordinates per lane, clamped to the map.
@@ -376,11 +420,27 @@ impl Environment {
         let (u0, u1) = (u0.min(below_one), u1.min(below_one));
         // Row from the marginal CDF, then the column from that row's conditional CDF; the
         // position inside the texel is the remainder of the number, rescaled.
-        let j = Self::search(l, &m.marginal, l.splat_i32(0), &m.row_halves, u1);
+        let j = Self::search(
+            l,
+            &m.marginal,
+            l.splat_i32(0),
+            &m.marginal_guide,
+            l.splat_i32(0),
+            m.row_buckets,
+            u1,
+        );
         let (r0, r1) = l.gather2(&m.marginal, j);
         let fv = ((u1 - r0) / (r1 - r0)).clamp(zero, below_one);
         let row = j * l.splat_i32(w as i32 + 1);
-        let i = Self::search(l, &m.conditional, row, &m.col_halves, u0);
+        let i = Self::search(
+            l,
+            &m.conditional,
+            row,
+            &m.conditional_guide,
+            j * l.splat_i32(m.col_buckets as i32 + 1),
+            m.col_buckets,
+            u0,
+        );
         let (c0, c1) = l.gather2(&m.conditional, row + i);
         let fu = ((u0 - c0) / (c1 - c0)).clamp(zero, below_one);
         let v = (j.to_f32() + fv) * (1.0 / h as f32);
@@ -556,6 +616,114 @@ mod tests {
         }
         // The spot is 6 of 512 texels but holds most of the weight.
         assert!(bright > 500, "{bright} of 1000 samples in the bright spot");
+    }
+
+    /// Searches every number of `us` in `cdf` (one row, through its guide) on a backend.
+    #[derive(Clone, Copy)]
+    struct Searches<'a> {
+        cdf: &'a [f32],
+        guide: &'a [u32],
+        buckets: usize,
+        us: &'a [f32],
+    }
+
+    impl coherent_simd::Kernel for Searches<'_> {
+        type Output = Vec<i32>;
+        #[inline(always)]
+        fn run<L: Lanes>(self, l: L) -> Vec<i32> {
+            let mut out = Vec::new();
+            for chunk in self.us.chunks_exact(L::N) {
+                let zero = l.splat_i32(0);
+                let j = Environment::search(
+                    l,
+                    self.cdf,
+                    zero,
+                    self.guide,
+                    zero,
+                    self.buckets,
+                    l.load(chunk),
+                );
+                out.extend((0..L::N).map(|k| j.lane(k)));
+            }
+            out
+        }
+    }
+
+    /// The guided search finds the cell a search of the whole table finds (the largest `j`
+    /// below `n` with `cdf[j] <= u`), on every backend, for even weights, a sun among dark
+    /// texels (long runs in one bucket), zero weights and a single cell, at every bucket's
+    /// edge, every CDF value and random numbers between.
+    #[test]
+    fn the_guided_search_finds_the_cell_of_a_full_search_on_every_backend() {
+        let mut tables: Vec<Vec<f64>> = vec![
+            vec![1.0; 37],
+            (0..100)
+                .map(|i| {
+                    if i == 40 {
+                        1e6
+                    } else {
+                        1e-3 * (1 + i % 3) as f64
+                    }
+                })
+                .collect(),
+            (0..64)
+                .map(|i| if i % 7 < 3 { 0.0 } else { i as f64 })
+                .collect(),
+            vec![0.0; 9],
+            vec![2.5],
+        ];
+        tables.push(
+            (0..1000)
+                .map(|i| ((i as f64) * 0.37).sin().powi(8))
+                .collect(),
+        );
+        let mut rng = 0x9e37_79b9u32;
+        for weights in &tables {
+            let mut table = Vec::new();
+            cdf(weights, &mut table);
+            let n = weights.len();
+            let b = buckets(n);
+            let mut g = Vec::new();
+            guide(&table, b, &mut g);
+            let below_one = 1.0f32.next_down();
+            let mut us: Vec<f32> = (0..=b).map(|k| k as f32 / b as f32).collect();
+            us.extend(table.iter().copied());
+            us.extend(table.iter().map(|c| c.next_down().max(0.0)));
+            for _ in 0..2000 {
+                rng ^= rng << 13;
+                rng ^= rng >> 17;
+                rng ^= rng << 5;
+                us.push((rng >> 8) as f32 / (1u32 << 24) as f32);
+            }
+            for u in &mut us {
+                *u = u.clamp(0.0, below_one);
+            }
+            us.resize(us.len().next_multiple_of(16), 0.5);
+            let want: Vec<i32> = us
+                .iter()
+                .map(|&u| (0..n).rev().find(|&j| table[j] <= u).unwrap() as i32)
+                .collect();
+            for backend in coherent_simd::Backend::usable() {
+                let got = backend
+                    .run(Searches {
+                        cdf: &table,
+                        guide: &g,
+                        buckets: b,
+                        us: &us,
+                    })
+                    .unwrap();
+                for (k, (got, want)) in got.iter().zip(&want).enumerate() {
+                    assert_eq!(
+                        got,
+                        want,
+                        "{} cells, {backend}: u {} in {:?}..",
+                        n,
+                        us[k],
+                        &table[*want as usize..]
+                    );
+                }
+            }
+        }
     }
 
     #[test]
