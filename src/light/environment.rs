@@ -3,10 +3,9 @@
 //! of samples per shading point, each drawn by importance from a 2D distribution over the
 //! map (a marginal distribution over rows and one conditional per row, texel weights =
 //! luminance times `sin(theta)`), found per lane from a guide table of each cumulative
-//! table and a binary search inside the guide's bounds ([`Environment::search`]). Rays
-//! that miss everything see the map
-//! ([`Environment::radiance`], nearest texel, the same piecewise-constant map the sampling
-//! assumes).
+//! table and a binary search inside the guide's bounds (`Environment::search`). Rays that
+//! miss everything see the map ([`Environment::radiance`], nearest texel, the same
+//! piecewise-constant map the sampling assumes).
 //!
 //! The samples are stratified: the unit square of random numbers is cut into a grid of as
 //! many cells as samples ([`strata_grid`]), and sample `k` of every shading point is drawn
