@@ -8,7 +8,7 @@
 # - the approximations' loop holds packed floating-point arithmetic (LLVM's loop vectoriser
 #   would show up as `mulps`, `addps`, `vfmadd...ps`, ...; in the BDF and texture loops the
 #   packed ops are counted and warned about: LLVM's SLP vectoriser packs a few within one
-#   call there, 33 and 32 at the last check), or
+#   call there, 80 and 32 at the last check; a build without SLP is as fast), or
 # - a loop, or any function of this build it calls (followed transitively), calls libm
 #   (`floorf`, `roundf`, `expf`, ...): the SIMD backends inline their rounding, so a library
 #   call in the scalar baseline alone would inflate every speedup over it.
