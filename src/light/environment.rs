@@ -335,7 +335,13 @@ impl Environment {
         buckets: usize,
         u: L::F32s,
     ) -> L::I32s {
-        let at = goffset + (u * buckets as f32).to_i32();
+        // Clamped, so that no number (not even a NaN, whose conversion gives `i32::MIN`)
+        // reads outside the guide.
+        let bucket = (u * buckets as f32)
+            .to_i32()
+            .max(l.splat_i32(0))
+            .min(l.splat_i32(buckets as i32 - 1));
+        let at = goffset + bucket;
         let mut lo = l.gather_u32(guide, at);
         let mut hi = l.gather_u32(&guide[1..], at);
         let one = l.splat_i32(1);
@@ -721,6 +727,21 @@ mod tests {
                         &table[*want as usize..]
                     );
                 }
+                // A NaN (or a number out of range) reads inside the tables and gives a cell.
+                let odd = [f32::NAN, -1.0, 1.0, 7.5, f32::INFINITY, f32::NEG_INFINITY];
+                let odd: Vec<f32> = odd.iter().copied().cycle().take(16).collect();
+                let got = backend
+                    .run(Searches {
+                        cdf: &table,
+                        guide: &g,
+                        buckets: b,
+                        us: &odd,
+                    })
+                    .unwrap();
+                assert!(
+                    got.iter().all(|&j| (0..n as i32).contains(&j)),
+                    "{backend}: {got:?}"
+                );
             }
         }
     }
