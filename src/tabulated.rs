@@ -249,7 +249,8 @@ impl Axis {
                 // outcomes (`Lanes::pick8`: selects, or a lane permute where the backend has
                 // one), not by a gather, which waits for level 3's outcome and then for
                 // memory. Measured (`kernels`, BDF, Zen 4): avx2 5.4x -> 5.9-6.1x over
-                // the scalar loop of then (before it got faster); the README has the rest.
+                // the scalar loop as it was then (it got faster since); the README has the
+                // rest.
                 if L::N >= 8 && h.len() > 3 {
                     let probe = l.pick8(&self.fourth_nodes, hit0, hit1, hit2);
                     let probe_inv = l.pick8(&self.fourth_invs, hit0, hit1, hit2);
