@@ -18,7 +18,7 @@ use std::fmt::Display;
 
 use coherent::accel_any::AccelKind;
 use coherent::render::centres::psnr;
-use coherent::render::{LightSamples, RenderStats, Stage};
+use coherent::render::{LightSamples, RenderStats};
 use coherent::simd::Backend;
 
 use crate::ctx::Ctx;
@@ -285,12 +285,11 @@ pub fn run_plan(
             std::hint::black_box(rendered.tone_mapped(b)?);
             let tonemap_s = t.elapsed().as_secs_f64();
             let st = &rendered.stats;
-            let mut secs: Vec<f64> = Stage::ALL
-                .iter()
-                .map(|s| st.stage_ns[*s as usize] as f64 * 1e-9)
-                .collect();
+            // The stage clocks' own cost (per lap) is out of the stages, and out of the film's
+            // remainder too.
+            let mut secs = st.stage_seconds().to_vec();
             let traced: f64 = secs.iter().sum();
-            secs.push((frame_s - traced).max(0.0));
+            secs.push((frame_s - traced - st.clock_seconds()).max(0.0));
             secs.push(tonemap_s);
             let total: f64 = secs.iter().sum();
             for (stage, s) in STAGES.iter().zip(&secs) {
@@ -779,8 +778,10 @@ fn met(ok: bool) -> String {
 fn breakdown_md(ctx: &Ctx, b: &Table) -> anyhow::Result<String> {
     let mut md = String::from(
         "\nWhere the time goes (`table3_breakdown.csv`): one more frame per backend with the \
-         BSP and the renderer's stage clocks on (they read the clock several times per packet, \
-         so these frames are a little slower than the timed ones above). `traversal` = first-hit \
+         BSP and the renderer's stage clocks on. They read the clock several times per packet, \
+         which makes these frames slower than the timed ones above; each stage's time has that \
+         cost taken out (an empty lap of the clock, measured on this machine, per lap), and so \
+         has the film's. `traversal` = first-hit \
          queries of camera, reflection and refraction packets; `shadows` = occlusion queries; \
          `shading` = material passes (textures and tabulated BDFs included); `lights` = light \
          sampling and shadow-ray set-up; `other` = camera rays, the hit-to-surface gather and \

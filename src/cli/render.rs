@@ -168,7 +168,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     );
     if args.stages {
         println!(
-            "time by stage (clock read per stage): {}",
+            "time by stage (the clock read around each stage, its own cost taken out): {}",
             st.stage_summary()
         );
     }
