@@ -110,7 +110,7 @@ impl FromStr for AccelKind {
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         let kind = Self::ALL
             .into_iter()
-            .find(|k| k.name() == s)
+            .find(|k| k.name().eq_ignore_ascii_case(s))
             .ok_or_else(|| AccelChoiceError::Unknown {
                 name: s.to_owned(),
                 available: Self::available_list(),

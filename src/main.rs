@@ -55,10 +55,28 @@ fn main() -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(e) => {
-            eprintln!("coherent: error: {e:#}");
+            eprintln!("coherent: error: {}", message(&e));
             ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes joined by ": ", leaving out a cause whose text the message
+/// already holds: most of our errors print their source in their own text as well, so
+/// anyhow's `{:#}` said "No such file or directory (os error 2)" twice.
+fn message(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let c = cause.to_string();
+        if text.contains(&c) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&c);
+    }
+    text
 }
 
 /// What `coherent render` takes.
@@ -139,9 +157,17 @@ fn scenes() -> anyhow::Result<()> {
     // The scene files of the repository this binary was built from (real scenes: their
     // assets come from `python3 scripts/native.py`).
     let dir = coherent::scene::scenes_dir();
-    let mut files: Vec<_> = std::fs::read_dir(&dir)
-        .map(|d| d.filter_map(|e| e.ok().map(|e| e.path())).collect())
-        .unwrap_or_default();
+    let mut files: Vec<_> = match std::fs::read_dir(&dir) {
+        Ok(d) => d.filter_map(|e| e.ok().map(|e| e.path())).collect(),
+        Err(e) => {
+            writeln!(
+                out,
+                "No scene files: {} cannot be read ({e})",
+                dir.display()
+            )?;
+            Vec::new()
+        }
+    };
     files.retain(|p| p.extension().is_some_and(|e| e == "toml"));
     files.sort();
     if !files.is_empty() {
@@ -151,13 +177,8 @@ fn scenes() -> anyhow::Result<()> {
             dir.display()
         )?;
         for f in files {
-            // The first comment line says what the scene is.
             let about = std::fs::read_to_string(&f)
-                .ok()
-                .and_then(|t| {
-                    t.lines()
-                        .find_map(|l| l.strip_prefix('#').map(|c| c.trim().to_owned()))
-                })
+                .map(|t| first_sentence(&t))
                 .unwrap_or_default();
             let name = f.file_name().unwrap_or_default().to_string_lossy();
             writeln!(out, "  {name:<16} {about}")?;
@@ -165,6 +186,20 @@ fn scenes() -> anyhow::Result<()> {
     }
     out.flush()?;
     Ok(())
+}
+
+/// What a scene file is: the first sentence of its leading comment lines, joined.
+fn first_sentence(text: &str) -> String {
+    let comment = text
+        .lines()
+        .map_while(|l| l.trim_start().strip_prefix('#'))
+        .map(str::trim)
+        .collect::<Vec<_>>()
+        .join(" ");
+    match comment.find(". ") {
+        Some(i) => comment[..=i].to_owned(),
+        None => comment,
+    }
 }
 
 /// `coherent info`.
@@ -242,6 +277,10 @@ fn info(json: bool) -> anyhow::Result<()> {
     )?;
     writeln!(out, "  embree  {}", embree_state())?;
     writeln!(out, "  obvhs   {}", obvhs_state())?;
+    writeln!(
+        out,
+        "  brute   every ray against every triangle: the reference the tests check the others by"
+    )?;
     out.flush()?;
     Ok(())
 }

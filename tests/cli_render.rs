@@ -120,7 +120,23 @@ fn bad_input_fails_with_a_message() {
          [[lights]]\ntype = \"omni\"\nposition = [0, 3, 0]\nintensity = [1, 1, 1]\n",
     )
     .unwrap();
-    let cases: [(Vec<&str>, &str); 7] = [
+    let nowhere = dir.path().join("no-such-folder").join("x.png");
+    // A bare mesh too large for the default light placed from its box.
+    let huge = dir.path().join("huge.obj");
+    std::fs::write(&huge, "v 1e30 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\n").unwrap();
+    let cases: [(Vec<&str>, &str); 10] = [
+        (
+            vec!["render", huge.to_str().unwrap(), "--out", png],
+            "too large for a light placed from it",
+        ),
+        (
+            vec!["render", "cornell", "--threads", "5000", "--out", png],
+            "--threads 5000: must be 1 to 1024",
+        ),
+        (
+            vec!["render", "cornell", "--out", nowhere.to_str().unwrap()],
+            "no-such-folder does not exist",
+        ),
         (
             vec!["render", unfetched.to_str().unwrap(), "--out", png],
             "nothing.glb is missing; it is not fetched: run `python3 scripts/native.py assimp`",
@@ -164,4 +180,20 @@ fn bad_input_fails_with_a_message() {
             "{args:?}: `{needle}` not in:\n{said}"
         );
     }
+}
+
+#[test]
+fn an_error_says_each_cause_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing.toml");
+    let png = dir.path().join("x.png");
+    let out = coherent(&[
+        "render",
+        missing.to_str().unwrap(),
+        "--out",
+        png.to_str().unwrap(),
+    ]);
+    let said = text(&out);
+    assert!(!out.status.success());
+    assert_eq!(said.matches("(os error 2)").count(), 1, "{said}");
 }

@@ -1097,9 +1097,10 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     if let Some(tr) = read_either(ctx, "accel_traversal.csv", TRAVERSAL_HEADER)? {
         md.push_str(
             "\nTraversal per ray (first-hit queries, any-hit for shadow rays; packet counts \
-             divided by the rays in them): the BSP's inner nodes, leaves (single rays skip empty \
-             leaves at their parent, so theirs count leaves with triangles; packets enter and \
-             count empty ones too), triangle tests, active \
+             divided by the rays in them): the BSP's inner nodes, leaves (from revision e106a42 on, \
+             single rays skip empty leaves at their parent, so theirs count leaves with \
+             triangles; packets, and single rays in runs before it, count every leaf they \
+             enter), triangle tests, active \
              lanes per packet test, the share of triangle tests the intersection cache \
              (mailbox) saved, and for comparison the triangle tests and nodes per single ray of \
              a BVH over the same meshes (obvhs' CWBVH, counted with obvhs' own traversal \

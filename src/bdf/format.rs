@@ -7,7 +7,7 @@
 //! | 0 | 8 | magic `CBDFTAB\0` |
 //! | 8 | 4 | `u32` version, 1 |
 //! | 12 | 4 | `u32` dimensions D: 3 isotropic `(theta_i, theta_o, delta_phi)`, 4 anisotropic `(theta_i, phi_i, theta_o, phi_o)` |
-//! | 16 | 4 | `u32` channels C: 1 (grey) or 3 (RGB) |
+//! | 16 | 4 | `u32` channels C: 1 to 3 (`MAX_CHANNELS`; 1 is grey, 3 RGB) |
 //! | 20 | 4 | `u32` symmetry: 0 none, 1 quadrant (4D only: `phi_i` in `[0, pi/2]`) |
 //! | 24 | 4 D | `u32` node count of each axis, `n_0 .. n_{D-1}` (each at least 2) |
 //! | | 4 (n_0 + .. + n_{D-1}) | `f32` nodes, axis after axis, strictly increasing, radians |

@@ -15,6 +15,10 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::RenderArgs;
 
+/// The most worker threads `--threads` accepts: far more than any machine of ours has cores
+/// (rayon's pool with thousands of threads took minutes to start and stop for a 0.01 s frame).
+const MAX_THREADS: usize = 1024;
+
 /// Runs `coherent render`.
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     // Check the cheap things before loading anything.
@@ -36,8 +40,24 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             args.out.display()
         ),
     }
-    if args.threads == Some(0) {
-        bail!("--threads must be at least 1");
+    if let Some(t) = args.threads
+        && !(1..=MAX_THREADS).contains(&t)
+    {
+        bail!(
+            "--threads {t}: must be 1 to {MAX_THREADS} (this machine runs {} at once)",
+            std::thread::available_parallelism().map_or(1, |n| n.get())
+        );
+    }
+    // Fail before rendering, not after, when the image cannot be written.
+    if let Some(dir) = args.out.parent()
+        && !dir.as_os_str().is_empty()
+        && !dir.is_dir()
+    {
+        bail!(
+            "{}: cannot write the image there: the folder {} does not exist",
+            args.out.display(),
+            dir.display()
+        );
     }
 
     let t_load = Instant::now();
@@ -172,6 +192,15 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             st.stage_summary()
         );
     }
+    let fixed = rendered.fixups;
+    if fixed.non_finite > 0 {
+        eprintln!(
+            "coherent: warning: {} image samples were infinite or NaN (a light or material far \
+             out of range?); they were counted and set to 0, so those pixels are darker than \
+             the scene",
+            fixed.non_finite
+        );
+    }
     if st.nan > 0 {
         eprintln!(
             "coherent: warning: {} radiance samples were NaN (a bad material or light?); they were \
@@ -183,5 +212,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
 }
 
 fn stop_text<S>(r: &coherent::film::Rendered<S>) -> String {
-    format!("{} passes, {:?}", r.passes.len(), r.stop)
+    let n = r.passes.len();
+    format!(
+        "{n} pass{}, {}",
+        if n == 1 { "" } else { "es" },
+        r.stop.describe()
+    )
 }

@@ -122,9 +122,12 @@ impl FilmOptions {
                 max_samples_per_pixel,
                 ..
             } => {
-                if !(accuracy.is_finite() && accuracy > 0.0) {
+                // A difference of displayed colours, whose channels lie in [0, 1]: above 1
+                // every pixel would pass at once.
+                if !(accuracy.is_finite() && accuracy > 0.0 && accuracy <= 1.0) {
                     return Err(FilmError::Options(format!(
-                        "accuracy {accuracy}: must be a positive number (e.g. 0.02 for 2%)"
+                        "accuracy {accuracy}: must be in (0, 1], a difference of displayed \
+                         colour (e.g. 0.02 for 2%)"
                     )));
                 }
                 max_samples_per_pixel
@@ -132,7 +135,8 @@ impl FilmOptions {
         };
         if spp == 0 {
             return Err(FilmError::Options(
-                "samples per pixel must be at least 1".into(),
+                "samples per pixel (--spp, --max-spp, or the scene's spp) must be at least 1"
+                    .into(),
             ));
         }
         let corners = (w.div_ceil(sx) as u64 + 1) * (h.div_ceil(sy) as u64 + 1);
@@ -158,6 +162,18 @@ pub enum StopReason {
     SampleBudget,
     /// Adaptive: the time budget ran out.
     TimeBudget,
+}
+
+impl StopReason {
+    /// Why the render stopped, in words.
+    pub fn describe(self) -> &'static str {
+        match self {
+            StopReason::Done => "every pass done",
+            StopReason::Accuracy => "every pixel met the accuracy",
+            StopReason::SampleBudget => "stopped at the sample cap",
+            StopReason::TimeBudget => "stopped at the time budget",
+        }
+    }
 }
 
 /// One pass, as recorded.

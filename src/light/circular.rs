@@ -9,7 +9,7 @@ use glam::Vec3;
 use super::sincos::sincos;
 use super::{
     LightError, LightSample, Strata, check_colour, check_dir, check_point, check_positive,
-    finish_scaled, toward,
+    check_samples, finish_scaled, toward,
 };
 
 /// Default polar grid (rings, sectors): 21 points, as many as the paper's rectangle.
@@ -41,14 +41,12 @@ impl Circular {
         seed: u64,
         jitter: bool,
     ) -> Result<Self, LightError> {
-        if rings == 0 || sectors == 0 {
-            return Err(LightError::bad(
-                "circular",
-                "points (rings, sectors)",
-                (rings, sectors),
-                "not at least 1 each",
-            ));
-        }
+        check_samples(
+            "circular",
+            "points (rings, sectors)",
+            u64::from(rings) * u64::from(sectors),
+            (rings, sectors),
+        )?;
         let normal = check_dir("circular", "normal", normal)?;
         let (tangent, bitangent) = normal.any_orthonormal_pair();
         Ok(Circular {

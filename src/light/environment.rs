@@ -31,7 +31,7 @@ use coherent_simd::{Lanes, Rgbs, SimdF32, SimdI32, SimdMask, Vec3s};
 use glam::Vec3;
 
 use super::sincos::sincos;
-use super::{LightError, LightSample, check_dir, finish};
+use super::{LightError, LightSample, check_dir, check_samples, finish};
 use crate::approx::{acos, atan2};
 
 /// Default samples per shading point.
@@ -175,14 +175,7 @@ impl Environment {
                 "not finite and non-negative",
             ));
         }
-        if samples == 0 {
-            return Err(LightError::bad(
-                "environment",
-                "samples",
-                samples,
-                "not at least 1",
-            ));
-        }
+        check_samples("environment", "samples", u64::from(samples), samples)?;
         let ez = check_dir("environment", "up", up)?;
         let ex =
             check_dir("environment", "forward", forward - ez * forward.dot(ez)).map_err(|_| {

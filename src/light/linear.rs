@@ -6,7 +6,10 @@
 use coherent_simd::{Lanes, Vec3s};
 use glam::Vec3;
 
-use super::{LightError, LightSample, Strata, check_colour, check_point, finish_scaled, toward};
+use super::{
+    LightError, LightSample, Strata, check_colour, check_point, check_samples, finish_scaled,
+    toward,
+};
 
 /// The paper's point count for linear lights.
 pub const DEFAULT_POINTS: u32 = 7;
@@ -31,14 +34,7 @@ impl Linear {
         seed: u64,
         jitter: bool,
     ) -> Result<Self, LightError> {
-        if points == 0 {
-            return Err(LightError::bad(
-                "linear",
-                "points",
-                points,
-                "not at least 1",
-            ));
-        }
+        check_samples("linear", "points", u64::from(points), points)?;
         Ok(Linear {
             a: check_point("linear", "a", a)?,
             b: check_point("linear", "b", b)?,
@@ -123,5 +119,26 @@ mod tests {
     #[test]
     fn zero_points_is_an_error() {
         assert!(Linear::new(Vec3::ZERO, Vec3::X, [1.0; 3], 0, 0, false).is_err());
+    }
+
+    #[test]
+    fn sample_counts_past_the_limit_are_errors_before_any_memory_is_taken() {
+        let max = crate::light::MAX_SAMPLES as u32;
+        assert!(Linear::new(Vec3::ZERO, Vec3::X, [1.0; 3], max, 0, false).is_ok());
+        let e = Linear::new(Vec3::ZERO, Vec3::X, [1.0; 3], 4_000_000_000, 0, false)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("points") && e.contains("65536"), "{e}");
+        // Area lights count the product of their grid.
+        let grid = crate::light::Rectangular::new(
+            Vec3::ZERO,
+            Vec3::X,
+            Vec3::Y,
+            [1.0; 3],
+            (100_000, 100_000),
+            0,
+            false,
+        );
+        assert!(grid.unwrap_err().to_string().contains("65536"));
     }
 }

@@ -200,6 +200,35 @@ impl LightError {
     }
 }
 
+/// The most light samples one light may take per shading point (area lights' points,
+/// the environment's samples). The paper's area lights take 7-21 and our scenes'
+/// environments 8 (the convergence tests up to 18,900); a count far beyond this (a typo, a
+/// value meant for another field) would take days per frame, or more memory than the
+/// machine has, before anything said why.
+pub const MAX_SAMPLES: u64 = 65_536;
+
+/// Checks that a light's sample count (`count`, the product of `shown`'s factors) lies in
+/// `1..=MAX_SAMPLES`.
+pub(crate) fn check_samples(
+    light: &'static str,
+    field: &'static str,
+    count: u64,
+    shown: impl std::fmt::Debug,
+) -> Result<(), LightError> {
+    if count == 0 {
+        return Err(LightError::bad(light, field, shown, "not at least 1 each"));
+    }
+    if count > MAX_SAMPLES {
+        return Err(LightError::bad(
+            light,
+            field,
+            shown,
+            "at most 65536 (`MAX_SAMPLES`) samples per shading point",
+        ));
+    }
+    Ok(())
+}
+
 /// Checks that `v` is finite.
 pub(crate) fn check_point(
     light: &'static str,

@@ -6,7 +6,10 @@
 use coherent_simd::{Lanes, SimdF32, Vec3s};
 use glam::Vec3;
 
-use super::{LightError, LightSample, Strata, check_colour, check_point, finish_scaled, toward};
+use super::{
+    LightError, LightSample, Strata, check_colour, check_point, check_samples, finish_scaled,
+    toward,
+};
 
 /// The paper's grid for rectangular lights.
 pub const DEFAULT_GRID: (u32, u32) = (7, 3);
@@ -35,14 +38,12 @@ impl Rectangular {
         seed: u64,
         jitter: bool,
     ) -> Result<Self, LightError> {
-        if nu == 0 || nv == 0 {
-            return Err(LightError::bad(
-                "rectangular",
-                "points (nu, nv)",
-                (nu, nv),
-                "not at least 1 each",
-            ));
-        }
+        check_samples(
+            "rectangular",
+            "points (nu, nv)",
+            u64::from(nu) * u64::from(nv),
+            (nu, nv),
+        )?;
         let edge_u = check_point("rectangular", "edge_u", edge_u)?;
         let edge_v = check_point("rectangular", "edge_v", edge_v)?;
         let cross = edge_u.cross(edge_v);

@@ -156,6 +156,9 @@ pub struct MeshFile {
     pub materials: Vec<Material>,
     /// Elements with fewer than three vertices (points, lines, two-vertex faces), skipped.
     pub skipped: usize,
+    /// Vertex normals in the file that are zero or not finite. When there are any, none of
+    /// the file's normals are used: the mesh gets smooth normals computed from its faces.
+    pub bad_normals: usize,
 }
 
 /// The default material of a mesh file that names none.
@@ -189,6 +192,7 @@ pub fn load_shaded(path: &Path) -> Result<MeshFile, MeshFileError> {
                 mesh: ShadedMesh::flat(Mesh::new(stem(path), positions, indices), 0),
                 materials: vec![default_material()],
                 skipped: 0,
+                bad_normals: 0,
             }
         }
         _ => {
@@ -213,6 +217,14 @@ pub fn load_shaded(path: &Path) -> Result<MeshFile, MeshFileError> {
             "warning: {}: skipped {} element(s) with fewer than 3 vertices",
             path.display(),
             file.skipped
+        );
+    }
+    if file.bad_normals > 0 {
+        eprintln!(
+            "warning: {}: {} vertex normal(s) are zero or not finite; the mesh's normals were \
+             computed from its faces instead",
+            path.display(),
+            file.bad_normals
         );
     }
     Ok(file)

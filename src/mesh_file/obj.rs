@@ -66,6 +66,7 @@ fn assemble(name: String, models: &[tobj::Model], default: u32) -> MeshFile {
     let mut indices = Vec::new();
     let mut material = Vec::new();
     let (mut all_normals, mut all_uvs) = (true, true);
+    let mut bad_normals = 0;
     for model in models {
         let m = &model.mesh;
         let base = positions.len() as u32;
@@ -76,7 +77,10 @@ fn assemble(name: String, models: &[tobj::Model], default: u32) -> MeshFile {
         if m.normals.len() == 3 * n {
             for v in 0..n {
                 let nv = Vec3::from_slice(&m.normals[3 * v..3 * v + 3]);
-                normals.push(nv.try_normalize().unwrap_or(Vec3::Z));
+                match nv.try_normalize() {
+                    Some(n) => normals.push(n),
+                    None => bad_normals += 1,
+                }
             }
         } else {
             all_normals = false;
@@ -100,7 +104,7 @@ fn assemble(name: String, models: &[tobj::Model], default: u32) -> MeshFile {
         uvs: (all_uvs && !models.is_empty()).then_some(uvs),
         material,
     };
-    let mesh = if all_normals && !models.is_empty() {
+    let mesh = if all_normals && bad_normals == 0 && !models.is_empty() {
         ShadedMesh {
             normals: Some(normals),
             ..mesh
@@ -112,6 +116,7 @@ fn assemble(name: String, models: &[tobj::Model], default: u32) -> MeshFile {
         mesh,
         materials: Vec::new(),
         skipped: 0,
+        bad_normals,
     }
 }
 
@@ -188,6 +193,22 @@ mod tests {
             Vec3::ZERO
         );
         assert!(f.mesh.normals.is_some(), "smooth normals are computed");
+    }
+
+    #[test]
+    fn zero_or_nan_normals_are_counted_and_replaced_by_the_faces_normals() {
+        let d = tempfile::tempdir().unwrap();
+        let p = write(
+            d.path(),
+            "n.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvn nan 0 1\nvn 0 0 0\nf 1//1 2//2 3//3\n",
+        );
+        let f = read_obj(&p).unwrap();
+        assert_eq!(f.bad_normals, 2);
+        // Smooth normals of the one triangle: its face normal, +z, at every vertex.
+        let n = f.mesh.normals.as_ref().unwrap();
+        assert_eq!(n.len(), 3);
+        assert!(n.iter().all(|v| (*v - Vec3::Z).length() < 1e-6), "{n:?}");
     }
 
     #[test]

@@ -29,7 +29,8 @@ pub fn parse_off(text: &str) -> Parsed {
     let nv: usize = number(c.next(), "vertex count", counts_line.0)?;
     let nf: usize = number(c.next(), "face count", counts_line.0)?;
     counts_line.1 = "";
-    let mut positions = Vec::with_capacity(nv);
+    // The counts come from the file: reserve no more than a large real mesh needs up front.
+    let mut positions = Vec::with_capacity(nv.min(1 << 20));
     for k in 0..nv {
         let (n, l) = lines
             .next()
@@ -40,7 +41,7 @@ pub fn parse_off(text: &str) -> Parsed {
         let z = number(w.next(), "z", n)?;
         positions.push(Vec3::new(x, y, z));
     }
-    let mut indices = Vec::with_capacity(nf);
+    let mut indices = Vec::with_capacity(nf.min(1 << 20));
     for k in 0..nf {
         let (n, l) = lines
             .next()

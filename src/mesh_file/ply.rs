@@ -38,6 +38,7 @@ pub fn read_ply(path: &Path) -> Result<MeshFile, MeshFileError> {
     let mut positions = Vec::with_capacity(vertices.len());
     let mut normals = Vec::with_capacity(vertices.len());
     let mut uvs = Vec::with_capacity(vertices.len());
+    let mut bad_normals = 0;
     for (i, v) in vertices.iter().enumerate() {
         let p = ["x", "y", "z"].map(|k| scalar(v, k));
         let [Some(x), Some(y), Some(z)] = p else {
@@ -45,7 +46,10 @@ pub fn read_ply(path: &Path) -> Result<MeshFile, MeshFileError> {
         };
         positions.push(Vec3::new(x, y, z));
         if let [Some(x), Some(y), Some(z)] = ["nx", "ny", "nz"].map(|k| scalar(v, k)) {
-            normals.push(Vec3::new(x, y, z).try_normalize().unwrap_or(Vec3::Z));
+            match Vec3::new(x, y, z).try_normalize() {
+                Some(n) => normals.push(n),
+                None => bad_normals += 1,
+            }
         }
         let uv = [("u", "v"), ("s", "t"), ("texture_u", "texture_v")]
             .iter()
@@ -92,7 +96,7 @@ pub fn read_ply(path: &Path) -> Result<MeshFile, MeshFileError> {
     }
     let n = positions.len();
     let mesh = ShadedMesh::flat(Mesh::new(stem(path), positions, indices), 0);
-    let mesh = if normals.len() == n {
+    let mesh = if normals.len() == n && bad_normals == 0 {
         ShadedMesh {
             normals: Some(normals),
             ..mesh
@@ -109,6 +113,7 @@ pub fn read_ply(path: &Path) -> Result<MeshFile, MeshFileError> {
         mesh,
         materials: vec![default_material()],
         skipped,
+        bad_normals,
     })
 }
 

@@ -77,9 +77,14 @@ pub enum SceneError {
         /// Missing (not fetched), rather than present and unreadable.
         missing: bool,
     },
-    /// Neither a file nor a built-in scene.
-    #[error("no scene {spec:?}: not a file, and not a built-in scene (built in: {known})")]
-    Unknown { spec: String, known: String },
+    /// Neither a scene or mesh file nor a built-in scene; `why` says which it is not (or
+    /// which scene file was probably meant).
+    #[error("no scene {spec:?}: {why} (built in: {known})")]
+    Unknown {
+        spec: String,
+        why: String,
+        known: String,
+    },
 }
 
 /// How to fetch an asset (again), for [`SceneError::Asset`].

@@ -324,6 +324,23 @@ impl Source<'_> {
         }
     }
 
+    /// The line and column (1-based) of top-level key `key` (`key = ...` before the first
+    /// table header), if the file has it.
+    fn key_line(&self, key: &str) -> Option<(usize, usize)> {
+        for (i, l) in self.text.lines().enumerate() {
+            let t = l.trim_start();
+            if t.starts_with('[') {
+                return None;
+            }
+            if let Some(rest) = t.strip_prefix(key)
+                && rest.trim_start().starts_with('=')
+            {
+                return Some((i + 1, l.len() - t.len() + 1));
+            }
+        }
+        None
+    }
+
     fn resolve(&self, p: &str) -> PathBuf {
         self.dir.join(p)
     }
@@ -687,8 +704,12 @@ fn build(src: &Source, spec: SceneSpec) -> Result<RenderScene, SceneError> {
 
     let mut lights = gltf_lights;
     for (k, l) in spec.lights.iter().enumerate() {
+        // A setting out of range is the scene file's error, not its file's (even when the
+        // light's file was fetched by the set-up).
         let light = make_light(src, l.get_ref(), k as u64).map_err(|e| match l.get_ref() {
-            LightSpec::Goniodiagram { file, .. } | LightSpec::Environment { file, .. } => {
+            LightSpec::Goniodiagram { file, .. } | LightSpec::Environment { file, .. }
+                if !matches!(e, light::LightError::BadParameter { .. }) =>
+            {
                 src.file_err(l.span(), &format!("lights[{k}].file"), file, e, None)
             }
             _ => src.at(l.span(), &format!("lights[{k}]"), e),
@@ -713,11 +734,16 @@ fn build(src: &Source, spec: SceneSpec) -> Result<RenderScene, SceneError> {
         motion,
     };
     scene.validate().map_err(|e| match e {
-        SceneError::Invalid { field, problem, .. } => SceneError::Syntax {
-            path: src.path.to_path_buf(),
-            line: 0,
-            column: 0,
-            problem: format!("{field}: {problem}"),
+        // At the key's line when it is a top-level key of the file (`spp = 0`), else naming
+        // the file without a line.
+        SceneError::Invalid { field, problem, .. } => match src.key_line(&field) {
+            Some((line, column)) => SceneError::Syntax {
+                path: src.path.to_path_buf(),
+                line,
+                column,
+                problem: format!("{field}: {problem}"),
+            },
+            None => SceneError::invalid(src.path.display().to_string(), field, problem),
         },
         e => e,
     })?;

@@ -103,6 +103,16 @@ fn wrong_type_names_the_line() {
 }
 
 #[test]
+fn settings_the_scene_rejects_name_their_line() {
+    let (msg, e) = error(&GOOD.replace("spp = 2", "spp = 0"));
+    assert_eq!(line_of(&e), 4, "{msg}");
+    assert!(msg.contains("test.toml:4:1: spp"), "{msg}");
+    let (msg, e) = error(&GOOD.replace("spp = 2", "accuracy = 5.0"));
+    assert_eq!(line_of(&e), 4, "{msg}");
+    assert!(msg.contains("accuracy"), "{msg}");
+}
+
+#[test]
 fn missing_files_are_named() {
     let (msg, e) = error(&GOOD.replace("shape = \"quad\"", "mesh = \"floor.obj\""));
     assert!(

@@ -57,7 +57,11 @@ pub fn load_gltf(path: &Path) -> Result<RenderScene, SceneError> {
         .camera
         .unwrap_or_else(|| Camera::framing(scene_box.min, scene_box.max));
     let lights = if l.lights.is_empty() {
-        vec![super::builtin::default_light(scene_box.min, scene_box.max)]
+        vec![super::builtin::default_light(
+            path,
+            scene_box.min,
+            scene_box.max,
+        )?]
     } else {
         l.lights
     };
@@ -244,7 +248,20 @@ fn read(path: &Path, bytes: &[u8]) -> Result<Loaded, SceneError> {
         .or_else(|| doc.scenes().next())
         .ok_or_else(|| err(path, "the file has no scene"))?;
     let mut stack: Vec<(gltf::Node, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+    // glTF's nodes form disjoint trees: a node met twice is a cycle (which would never end)
+    // or a node with two parents.
+    let mut seen = vec![false; doc.nodes().len()];
     while let Some((node, parent)) = stack.pop() {
+        if std::mem::replace(&mut seen[node.index()], true) {
+            return Err(err(
+                path,
+                format!(
+                    "node {} is reached twice: the node hierarchy has a cycle or a node with \
+                     two parents (glTF nodes must form trees)",
+                    node.index()
+                ),
+            ));
+        }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         let affine = Affine3A::from_mat4(world);
         if let Some(m) = node.mesh()
@@ -492,5 +509,24 @@ pub(crate) mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("none.glb"), "{e}");
+    }
+
+    #[test]
+    fn a_node_that_is_its_own_child_is_an_error_not_an_endless_walk() {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("cycle.gltf");
+        let text = quad_gltf().replace(
+            r#"{"mesh": 0, "translation": [0, 0, -2]}"#,
+            r#"{"mesh": 0, "translation": [0, 0, -2], "children": [0]}"#,
+        );
+        assert!(text.contains(r#""children": [0]"#));
+        std::fs::write(&p, text).unwrap();
+        let e = super::super::load(p.to_str().unwrap())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("cycle.gltf") && e.contains("node 0 is reached twice"),
+            "{e}"
+        );
     }
 }

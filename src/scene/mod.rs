@@ -168,9 +168,12 @@ impl RenderScene {
             return Err(bad("spp", "must be at least 1".to_string()));
         }
         if let Some(a) = self.accuracy
-            && !(a.is_finite() && a > 0.0)
+            && !(a.is_finite() && a > 0.0 && a <= 1.0)
         {
-            return Err(bad("accuracy", format!("{a} is not a finite value > 0")));
+            return Err(bad(
+                "accuracy",
+                format!("{a} is not in (0, 1] (a difference of displayed colour)"),
+            ));
         }
         if self
             .background
@@ -204,8 +207,24 @@ pub fn load(spec: &str) -> Result<RenderScene, SceneError> {
         _ => match builtin::by_name(spec) {
             Some(s) => s,
             None => {
+                let file = scenes_dir().join(format!("{spec}.toml"));
+                let why = if path.is_file() {
+                    format!(
+                        "a file, but not of a format read here (scene files: .toml, .gltf, \
+                         .glb; meshes: .{})",
+                        MESH_EXTENSIONS.join(", .")
+                    )
+                } else if file.is_file() {
+                    format!(
+                        "not a built-in scene; the scene file {} has that name",
+                        file.display()
+                    )
+                } else {
+                    "not a file, and not a built-in scene".to_string()
+                };
                 return Err(SceneError::Unknown {
                     spec: spec.to_string(),
+                    why,
                     known: builtin_names()
                         .iter()
                         .map(|(n, _)| *n)

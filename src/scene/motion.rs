@@ -69,6 +69,22 @@ impl InstanceMotion {
             {
                 return Some(format!("keyframe {i} is not finite"));
             }
+            // A zero scale is singular, and so is a frame between keys whose scales differ
+            // in sign along an axis (the linear blend passes through zero).
+            if k.scale.cmpeq(Vec3::ZERO).any() {
+                return Some(format!(
+                    "keyframe {i}: scale {:?} is singular (a zero component)",
+                    k.scale.to_array()
+                ));
+            }
+            if i > 0 && (k.scale * self.keys[i - 1].scale).cmplt(Vec3::ZERO).any() {
+                return Some(format!(
+                    "keyframe {i}: scale {:?} differs in sign from the previous keyframe's {:?}, \
+                     so a frame between them would scale by zero",
+                    k.scale.to_array(),
+                    self.keys[i - 1].scale.to_array()
+                ));
+            }
             if i > 0 && k.time <= self.keys[i - 1].time {
                 return Some(format!(
                     "keyframe {i}: time {} does not follow {}",
@@ -106,5 +122,19 @@ mod tests {
             keys: vec![key(1.0, 0.0), key(1.0, 1.0)],
         };
         assert!(bad.problem().unwrap().contains("does not follow"));
+        let scaled = |s: f32| Keyframe {
+            scale: Vec3::new(1.0, s, 1.0),
+            ..key(1.0, 0.0)
+        };
+        let flat = InstanceMotion {
+            instance: 0,
+            keys: vec![key(0.0, 0.0), scaled(0.0)],
+        };
+        assert!(flat.problem().unwrap().contains("singular"));
+        let flip = InstanceMotion {
+            instance: 0,
+            keys: vec![key(0.0, 0.0), scaled(-1.0)],
+        };
+        assert!(flip.problem().unwrap().contains("differs in sign"));
     }
 }

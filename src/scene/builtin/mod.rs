@@ -179,7 +179,7 @@ pub fn bare_mesh(path: &Path) -> Result<RenderScene, SceneError> {
         meshes: vec![file.mesh],
         instances: vec![Instance::identity(0)],
         materials: file.materials,
-        lights: vec![default_light(b.min, b.max)],
+        lights: vec![default_light(path, b.min, b.max)?],
         tonemap: Operator::default(),
         camera: Camera::framing(b.min, b.max),
         width,
@@ -194,15 +194,30 @@ pub fn bare_mesh(path: &Path) -> Result<RenderScene, SceneError> {
 
 /// The default light of a bare mesh: an omni light above and behind the default camera
 /// ([`Camera::framing`]), bright enough to give the near side of the box a radiance of
-/// about one.
-pub fn default_light(min: Vec3, max: Vec3) -> Light {
+/// about one. An error naming `path` when the box is too large for a finite light (a mesh
+/// with coordinates near `f32::MAX`).
+pub fn default_light(path: &Path, min: Vec3, max: Vec3) -> Result<Light, SceneError> {
     let center = 0.5 * (min + max);
     let radius = (0.5 * (max - min).length()).max(1e-3);
     let position = center + Vec3::new(-0.5, 2.0, 1.5) * radius;
     let d2 = (position - center).length_squared();
     // A Lambertian surface of albedo 0.6 facing the light at distance d: L = 0.6 I / (pi d^2).
     let intensity = d2 * std::f32::consts::PI / 0.6 * 0.8;
-    Light::Omni(Omni::new(position, [intensity; 3]).expect("finite position and intensity"))
+    Omni::new(position, [intensity; 3])
+        .map(Light::Omni)
+        .map_err(|_| {
+            SceneError::invalid(
+                path.display().to_string(),
+                "default light",
+                format!(
+                    "the mesh's bounding box ({:?} to {:?}) is too large for a light placed \
+                     from it (its position or intensity would overflow); render the mesh from \
+                     a scene file with its own lights and camera",
+                    min.to_array(),
+                    max.to_array()
+                ),
+            )
+        })
 }
 
 #[cfg(test)]
