@@ -12,7 +12,7 @@
 use std::path::Path;
 
 use super::LightError;
-use super::photometry::{PhotometricTable, PhotometricType};
+use super::photometry::{PhotometricTable, PhotometricType, quote};
 
 /// Reads and parses an IES file.
 pub fn load(path: &Path) -> Result<PhotometricTable, LightError> {
@@ -52,7 +52,7 @@ impl<'a> Tokens<'a> {
         self.next += 1;
         match tok.parse::<f64>() {
             Ok(v) if v.is_finite() => Ok((line, v)),
-            _ => Err(self.err(line, field, format!("`{tok}` is not a number"))),
+            _ => Err(self.err(line, field, format!("{} is not a number", quote(tok)))),
         }
     }
 
@@ -93,7 +93,7 @@ pub fn parse(text: &str, path: &Path) -> Result<PhotometricTable, LightError> {
             err(
                 tilt_at + 1,
                 "TILT",
-                format!("`{tilt_line}`: expected TILT=NONE or TILT=INCLUDE"),
+                format!("{}: expected TILT=NONE or TILT=INCLUDE", quote(tilt_line)),
             )
         })?;
     let mut items = Vec::new();
@@ -247,7 +247,7 @@ pub fn parse(text: &str, path: &Path) -> Result<PhotometricTable, LightError> {
         return Err(err(
             line,
             "end of file",
-            format!("unexpected `{tok}` after the candela values"),
+            format!("unexpected {} after the candela values", quote(tok)),
         ));
     }
     let table = PhotometricTable {

@@ -10,7 +10,7 @@
 use std::path::Path;
 
 use super::LightError;
-use super::photometry::{PhotometricTable, PhotometricType};
+use super::photometry::{PhotometricTable, PhotometricType, quote};
 
 /// Reads and parses a EULUMDAT file (any 8-bit encoding: text fields are not used).
 pub fn load(path: &Path) -> Result<PhotometricTable, LightError> {
@@ -55,7 +55,7 @@ impl Lines<'_> {
         let s = s.replace(',', ".");
         match s.parse::<f64>() {
             Ok(v) if v.is_finite() => Ok((line, v)),
-            _ => Err(self.err(line, field, format!("`{s}` is not a number"))),
+            _ => Err(self.err(line, field, format!("{} is not a number", quote(&s)))),
         }
     }
 
@@ -226,8 +226,8 @@ pub fn parse(text: &str, path: &Path) -> Result<PhotometricTable, LightError> {
             line,
             "end of file",
             format!(
-                "unexpected `{}` after the {} intensities",
-                f.lines[line - 1].trim(),
+                "unexpected {} after the {} intensities",
+                quote(f.lines[line - 1].trim()),
                 count * ng
             ),
         ));

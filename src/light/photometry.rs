@@ -224,6 +224,26 @@ impl PhotometricTable {
 /// The plane angles and their images under the given reflections within the circle,
 /// sorted, duplicates
 /// (within 1e-3 degree) removed.
+/// `text` as an error message quotes it: in backticks, control and non-ASCII characters
+/// escaped, cut to 40 characters (a binary file's "line" is otherwise kilobytes of bytes
+/// that the terminal would interpret).
+pub(crate) fn quote(text: &str) -> String {
+    let mut q: String = text
+        .chars()
+        .flat_map(char::escape_default)
+        .take(40)
+        .collect();
+    if text
+        .chars()
+        .flat_map(char::escape_default)
+        .nth(40)
+        .is_some()
+    {
+        q.push_str("...");
+    }
+    format!("`{q}`")
+}
+
 fn unfold(planes: &[f32], maps: &[fn(f32) -> f32], (lo, hi): (f32, f32)) -> Vec<f32> {
     let mut all: Vec<f32> = planes.to_vec();
     for m in maps {
@@ -238,6 +258,14 @@ fn unfold(planes: &[f32], maps: &[fn(f32) -> f32], (lo, hi): (f32, f32)) -> Vec<
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn quoted_text_is_escaped_and_cut() {
+        assert_eq!(quote("12a"), "`12a`");
+        assert_eq!(quote("\u{1b}[2J"), "`\\u{1b}[2J`");
+        let long = quote(&"x".repeat(100));
+        assert_eq!(long, format!("`{}...`", "x".repeat(40)));
+    }
 
     fn table(kind: PhotometricType, planes: Vec<f32>) -> PhotometricTable {
         let angles = vec![0.0, 45.0, 90.0];

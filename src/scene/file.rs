@@ -898,18 +898,37 @@ fn make_light(src: &Source, l: &LightSpec, seed: u64) -> Result<Light, light::Li
             inner_deg,
             outer_deg,
             exact,
-        } => Light::Spot(light::Spot::new(
-            v(position),
-            v(axis),
-            intensity,
-            inner_deg.to_radians(),
-            outer_deg.to_radians(),
-            if exact {
-                SpotFalloff::Exact
-            } else {
-                SpotFalloff::default()
-            },
-        )?),
+        } => {
+            // Checked in the file's degrees (the light checks its radians again).
+            if !(outer_deg.is_finite() && outer_deg > 0.0 && outer_deg <= 180.0) {
+                return Err(light::LightError::bad(
+                    "spot",
+                    "outer_deg",
+                    outer_deg,
+                    "not in (0, 180] degrees",
+                ));
+            }
+            if !(inner_deg.is_finite() && inner_deg >= 0.0 && inner_deg < outer_deg) {
+                return Err(light::LightError::bad(
+                    "spot",
+                    "inner_deg",
+                    inner_deg,
+                    "not in [0, outer_deg) degrees",
+                ));
+            }
+            Light::Spot(light::Spot::new(
+                v(position),
+                v(axis),
+                intensity,
+                inner_deg.to_radians(),
+                outer_deg.to_radians(),
+                if exact {
+                    SpotFalloff::Exact
+                } else {
+                    SpotFalloff::default()
+                },
+            )?)
+        }
         LightSpec::Parallel {
             direction,
             irradiance,

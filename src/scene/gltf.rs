@@ -176,6 +176,23 @@ fn read(path: &Path, bytes: &[u8]) -> Result<Loaded, SceneError> {
                 skipped_primitives += 1;
                 continue;
             }
+            // The gltf crate reads any accessor as the type asked for; the format requires
+            // positions to be three floats.
+            if let Some(a) = prim.get(&gltf::Semantic::Positions)
+                && (a.dimensions() != gltf::accessor::Dimensions::Vec3
+                    || a.data_type() != gltf::accessor::DataType::F32)
+            {
+                return Err(err(
+                    path,
+                    format!(
+                        "mesh '{name}': POSITION accessor {} is {:?} of {:?}, not VEC3 of \
+                         FLOAT",
+                        a.index(),
+                        a.dimensions(),
+                        a.data_type()
+                    ),
+                ));
+            }
             let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
             let Some(p) = reader.read_positions() else {
                 return Err(err(
@@ -271,6 +288,16 @@ fn read(path: &Path, bytes: &[u8]) -> Result<Loaded, SceneError> {
         }
         let origin = affine.transform_point3(Vec3::ZERO);
         let forward = affine.transform_vector3(Vec3::NEG_Z);
+        if camera.is_none()
+            && let Some(c) = node.camera()
+            && matches!(c.projection(), gltf::camera::Projection::Orthographic(_))
+        {
+            eprintln!(
+                "warning: {}: camera {} is orthographic, which is not supported; it is skipped",
+                path.display(),
+                c.index()
+            );
+        }
         if camera.is_none()
             && let Some(c) = node.camera()
             && let gltf::camera::Projection::Perspective(p) = c.projection()
@@ -526,6 +553,23 @@ pub(crate) mod tests {
             .to_string();
         assert!(
             e.contains("cycle.gltf") && e.contains("node 0 is reached twice"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn positions_that_are_not_three_floats_are_an_error() {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("vec2.gltf");
+        let from = r#""count": 4, "type": "VEC3""#;
+        let text = quad_gltf();
+        assert!(text.contains(from));
+        std::fs::write(&p, text.replace(from, r#""count": 4, "type": "VEC2""#)).unwrap();
+        let e = super::super::load(p.to_str().unwrap())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("vec2.gltf") && e.contains("not VEC3 of FLOAT"),
             "{e}"
         );
     }
