@@ -30,7 +30,8 @@ pub enum MeshFileError {
         #[source]
         source: std::io::Error,
     },
-    #[error("{path}:{line}: {problem}")]
+    /// `line` is 1-based; 0 when the parser did not say (then not printed).
+    #[error("{path}{}: {problem}", at_line(*.line))]
     Parse {
         path: PathBuf,
         line: usize,
@@ -144,6 +145,15 @@ impl RealMesh {
     /// The real mesh called `name`.
     pub fn named(name: &str) -> Option<RealMesh> {
         REAL_MESHES.into_iter().find(|m| m.name == name)
+    }
+}
+
+/// `:line`, or nothing for line 0 (unknown).
+fn at_line(line: usize) -> String {
+    if line == 0 {
+        String::new()
+    } else {
+        format!(":{line}")
     }
 }
 
