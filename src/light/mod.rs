@@ -193,7 +193,10 @@ impl LightError {
     ) -> LightError {
         // A vector as the scene file writes it, `[x, y, z]`, not glam's `Vec3(x, y, z)`.
         let value = format!("{value:?}");
-        let value = match value.strip_prefix("Vec3(").and_then(|v| v.strip_suffix(')')) {
+        let value = match value
+            .strip_prefix("Vec3(")
+            .and_then(|v| v.strip_suffix(')'))
+        {
             Some(xyz) => format!("[{xyz}]"),
             None => value,
         };
