@@ -148,8 +148,9 @@ impl RealMesh {
     }
 }
 
-/// `:line`, or nothing for line 0 (unknown).
-fn at_line(line: usize) -> String {
+/// `:line`, or nothing for line 0 (unknown): the line part of an error message (mesh files
+/// and scene files alike).
+pub(crate) fn at_line(line: usize) -> String {
     if line == 0 {
         String::new()
     } else {

@@ -29,7 +29,7 @@ pub enum SceneError {
     },
     /// A value that parses but cannot be used; `field` says which (e.g. `camera.up`,
     /// `materials.red.ior`), `line` where it is when known (0 when not).
-    #[error("{scene}{}: {field}: {problem}", line_suffix(*.line))]
+    #[error("{scene}{}: {field}: {problem}", crate::mesh_file::at_line(*.line))]
     Invalid {
         scene: String,
         line: usize,
@@ -129,14 +129,6 @@ impl SceneError {
                 ..
             }
         )
-    }
-}
-
-fn line_suffix(line: usize) -> String {
-    if line == 0 {
-        String::new()
-    } else {
-        format!(":{line}")
     }
 }
 
