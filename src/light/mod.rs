@@ -225,7 +225,12 @@ pub(crate) fn check_samples(
     shown: impl std::fmt::Debug,
 ) -> Result<(), LightError> {
     if count == 0 {
-        return Err(LightError::bad(light, field, shown, "not at least 1 each"));
+        return Err(LightError::bad(
+            light,
+            field,
+            shown,
+            "no samples (each count must be at least 1)",
+        ));
     }
     if count > MAX_SAMPLES {
         return Err(LightError::bad(
