@@ -192,8 +192,9 @@ impl AnyAccel {
         }
     }
 
-    /// Tells the accelerator whether the next packets are coherent (primary and shadow rays)
-    /// or not (secondary rays): Embree's COHERENT flag; the others ignore it.
+    /// Tells the accelerator whether every next packet is coherent (primary and shadow rays)
+    /// or not (secondary rays): Embree's COHERENT flag, which it otherwise sets per packet
+    /// by the packet's directions; the others ignore it.
     pub fn set_coherent(&mut self, on: bool) {
         #[cfg(feature = "embree")]
         if let AnyAccel::Embree(e) = self {

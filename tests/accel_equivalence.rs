@@ -233,8 +233,10 @@ fn check_queries<L: Lanes, A: Accel>(
 #[derive(Clone, Copy, Debug)]
 enum Which {
     Bsp,
+    /// Embree with its COHERENT query flag set per packet, or on every packet (its frustum
+    /// traversal then takes scattered packets too).
     #[cfg(feature = "embree")]
-    Embree,
+    Embree(coherent::embree::Coherence),
     #[cfg(feature = "obvhs")]
     Obvhs(coherent::obvhs::Kind),
 }
@@ -256,9 +258,13 @@ fn check_which<L: Lanes>(
             coherent_accel::testing::check_all_queries(l, bf, &a, rays, seed)
         }
         #[cfg(feature = "embree")]
-        Which::Embree => {
+        Which::Embree(coherence) => {
             use coherent::embree::{Embree, EmbreeParams};
-            let a = Embree::build(scene, &EmbreeParams::default()).map_err(fail)?;
+            let params = EmbreeParams {
+                coherence,
+                ..Default::default()
+            };
+            let a = Embree::build(scene, &params).map_err(fail)?;
             check_queries(l, Ref { scene }, bf, &a, rays, seed)
         }
         #[cfg(feature = "obvhs")]
@@ -466,7 +472,35 @@ macro_rules! accel_backends {
 
 accel_backends!(bsp, Which::Bsp);
 #[cfg(feature = "embree")]
-accel_backends!(embree, Which::Embree);
+accel_backends!(
+    embree,
+    Which::Embree(coherent::embree::Coherence::PerPacket)
+);
+
+/// Embree's frustum traversal on every packet (the COHERENT flag however scattered the rays),
+/// on random scenes and the edge cases, at each packet width.
+#[cfg(feature = "embree")]
+mod embree_coherent {
+    use super::*;
+    const W: Which = Which::Embree(coherent::embree::Coherence::Coherent);
+
+    #[test]
+    fn edge_cases() {
+        for b in [Backend::Sse, Backend::Avx2, Backend::Avx512] {
+            on(b, EdgeCases(W));
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(6))]
+        #[test]
+        fn random_scenes(seed in any::<u64>(), tris in 1usize..250, meshes in 1usize..4, instances in 0usize..6) {
+            for b in [Backend::Sse, Backend::Avx2, Backend::Avx512] {
+                on(b, RandomScene { which: W, seed, tris, meshes, instances });
+            }
+        }
+    }
+}
 #[cfg(feature = "obvhs")]
 accel_backends!(obvhs_bvh2, Which::Obvhs(coherent::obvhs::Kind::Bvh2));
 #[cfg(feature = "obvhs")]

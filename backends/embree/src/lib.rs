@@ -20,9 +20,9 @@ mod abi;
 
 pub use device::Device;
 pub use error::EmbreeError;
-pub use packet::PacketK;
+pub use packet::{COHERENT_CONE_DEGREES, PacketK};
 pub use query::valid_lanes;
-pub use scene::{BuildQuality, Embree, EmbreeParams};
+pub use scene::{BuildQuality, Coherence, Embree, EmbreeParams};
 
 /// Whether Embree can be used here, or why not (cause and fix).
 pub fn unavailable_reason() -> Option<String> {

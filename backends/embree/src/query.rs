@@ -1,7 +1,7 @@
 //! Ray queries on the Embree scene (the paper's two queries of section 3, plus occlusion):
 //! first hit, all hits (through a filter callback that records and rejects every hit), and
 //! occlusion, for single rays (`rtcIntersect1`) and for packets of 4, 8 and 16 rays
-//! (`rtcIntersect4/8/16`, with the COHERENT flag unless the parameters say otherwise).
+//! (`rtcIntersect4/8/16`, with the COHERENT flag as the parameters' [`Coherence`] says).
 //!
 //! Segments: Embree accepts hits in `(tnear, tfar]`, the interface asks for `[tmin, tmax)`;
 //! the two differ only for a hit exactly at a bound.
@@ -13,7 +13,7 @@ use coherent_simd::{Lanes, SimdMask};
 
 use crate::ffi::{self, RTCRayHitK, RTCRayQueryContext, ValidK};
 use crate::packet::PacketK;
-use crate::scene::Embree;
+use crate::scene::{Coherence, Embree};
 
 /// The context of an all-hits query: Embree's context first (the library sees only that),
 /// then where the filter callback records the hits.
@@ -70,6 +70,19 @@ fn flags(coherent: bool) -> c_int {
         ffi::RAY_QUERY_FLAG_COHERENT
     } else {
         ffi::RAY_QUERY_FLAG_INCOHERENT
+    }
+}
+
+impl Embree {
+    /// The query flags of a packet whose rays are coherent or not
+    /// ([`PacketK`]'s cone test), as the parameters' [`Coherence`] says.
+    #[inline(always)]
+    fn packet_flags(&self, coherent: bool) -> c_int {
+        flags(match self.params.coherence {
+            Coherence::Coherent => true,
+            Coherence::Incoherent => false,
+            Coherence::PerPacket => coherent,
+        })
     }
 }
 
@@ -228,7 +241,7 @@ impl Embree {
     /// [`PacketK::hit`]. Safe: a [`PacketK`] holds only rays Embree's contract accepts.
     #[inline]
     pub fn intersect_k<const K: usize>(&self, p: &mut PacketK<K>) {
-        let mut args = ffi::RTCIntersectArguments::new(flags(self.params.coherent));
+        let mut args = ffi::RTCIntersectArguments::new(self.packet_flags(p.coherent));
         // SAFETY: `PacketK::new` switched on only lanes with valid rays and `tnear >= 0`.
         unsafe { self.call_intersect(&mut p.rh, &p.valid, &mut args) };
     }
@@ -236,7 +249,7 @@ impl Embree {
     /// Occlusion of a packed K-wide packet; read it back with [`PacketK::occluded`].
     #[inline]
     pub fn occluded_k<const K: usize>(&self, p: &mut PacketK<K>) {
-        let mut args = ffi::RTCOccludedArguments::new(flags(self.params.coherent));
+        let mut args = ffi::RTCOccludedArguments::new(self.packet_flags(p.coherent));
         // SAFETY: as in `intersect_k`.
         unsafe { self.call_occluded(&mut p.rh, &p.valid, &mut args) };
     }
@@ -249,7 +262,7 @@ impl Embree {
             return;
         };
         // SAFETY: as in `intersect_k`.
-        unsafe { scene.all_hits_k_raw(&mut p.rh, &p.valid, hits) };
+        unsafe { scene.all_hits_k_raw(&mut p.rh, &p.valid, p.coherent, hits) };
         for (lane, h) in &mut hits[from..] {
             h.t += p.shift[*lane as usize];
             if scene.direct {
@@ -258,14 +271,15 @@ impl Embree {
         }
     }
 
-    /// `rtcIntersectK` on a raw packet (the layout tests use it with guard words).
+    /// `rtcIntersectK` on a raw packet (the layout tests use it with guard words); with
+    /// [`Coherence::PerPacket`] it goes without the COHERENT flag (Embree's default).
     ///
     /// # Safety
     /// Every lane on in `valid` must hold a valid ray ([`Ray1::is_valid`]) with
     /// `0 <= tnear <= tfar`, and its hit's `geomID` must be [`ffi::INVALID_ID`]: Embree's
     /// answer on other rays is undefined.
     pub unsafe fn intersect_k_raw<const K: usize>(&self, p: &mut RTCRayHitK<K>, valid: &ValidK<K>) {
-        let mut args = ffi::RTCIntersectArguments::new(flags(self.params.coherent));
+        let mut args = ffi::RTCIntersectArguments::new(self.packet_flags(false));
         // SAFETY: the caller's contract.
         unsafe { self.call_intersect(p, valid, &mut args) };
     }
@@ -277,6 +291,7 @@ impl Embree {
         &self,
         p: &mut RTCRayHitK<K>,
         valid: &ValidK<K>,
+        coherent: bool,
         hits: &mut Vec<(u32, Hit1)>,
     ) {
         let mut ctx = AllHitsContext {
@@ -284,7 +299,7 @@ impl Embree {
             hits,
         };
         let mut args = ffi::RTCIntersectArguments::new(
-            flags(self.params.coherent) | ffi::RAY_QUERY_FLAG_INVOKE_ARGUMENT_FILTER,
+            self.packet_flags(coherent) | ffi::RAY_QUERY_FLAG_INVOKE_ARGUMENT_FILTER,
         );
         args.context = (&mut ctx as *mut AllHitsContext).cast();
         args.filter = Some(record_and_reject);
@@ -404,20 +419,21 @@ impl Embree {
     /// The plainest use of the C API, to measure what any wrapper costs: for each packed
     /// packet, restore its far bounds and hit ids ([`PacketK::reset`]) and call
     /// `rtcIntersectK` (or `rtcOccludedK` when `occlusion`), with the query arguments made
-    /// once. Nothing is read back.
+    /// once (only their flags set per packet). Nothing is read back.
     pub fn trace_plain<const K: usize>(&self, packets: &mut [PacketK<K>], occlusion: bool) {
-        let fl = flags(self.params.coherent);
         if occlusion {
-            let mut args = ffi::RTCOccludedArguments::new(fl);
+            let mut args = ffi::RTCOccludedArguments::new(0);
             for p in packets {
                 p.reset();
+                args.flags = self.packet_flags(p.coherent);
                 // SAFETY: a `PacketK` holds only rays inside Embree's contract.
                 unsafe { self.call_occluded(&mut p.rh, &p.valid, &mut args) };
             }
         } else {
-            let mut args = ffi::RTCIntersectArguments::new(fl);
+            let mut args = ffi::RTCIntersectArguments::new(0);
             for p in packets {
                 p.reset();
+                args.flags = self.packet_flags(p.coherent);
                 // SAFETY: as above.
                 unsafe { self.call_intersect(&mut p.rh, &p.valid, &mut args) };
             }
@@ -439,13 +455,13 @@ impl Embree {
         packets: &mut [PacketK<K>],
         occlusion: bool,
     ) -> (u64, [f32; K]) {
-        let fl = flags(self.params.coherent);
         let (mut hits, mut t_acc) = (0u64, [0.0f32; K]);
         if occlusion {
-            let mut args = ffi::RTCOccludedArguments::new(fl);
+            let mut args = ffi::RTCOccludedArguments::new(0);
             for j in 0..packets.len() {
                 let p = &mut packets[j];
                 p.reset();
+                args.flags = self.packet_flags(p.coherent);
                 // SAFETY: as in `trace_plain`.
                 unsafe { self.call_occluded(&mut p.rh, &p.valid, &mut args) };
                 if j > 0 {
@@ -456,10 +472,11 @@ impl Embree {
                 hits += u64::from(p.occluded_bits().count_ones());
             }
         } else {
-            let mut args = ffi::RTCIntersectArguments::new(fl);
+            let mut args = ffi::RTCIntersectArguments::new(0);
             for j in 0..packets.len() {
                 let p = &mut packets[j];
                 p.reset();
+                args.flags = self.packet_flags(p.coherent);
                 // SAFETY: as in `trace_plain`.
                 unsafe { self.call_intersect(&mut p.rh, &p.valid, &mut args) };
                 if j > 0 {

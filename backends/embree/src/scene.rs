@@ -58,6 +58,25 @@ impl core::str::FromStr for BuildQuality {
     }
 }
 
+/// Which packet queries carry Embree's COHERENT query flag. With it, Embree traces a packet
+/// as one frustum (`occludedCoherent`, `intersectCoherent`) and drops to single rays only
+/// when 2 lanes or fewer are left; without it, each lane's own boxes are tested and the
+/// packet drops to single rays below a few active lanes. A frustum is tight around camera
+/// rays and shadow rays to a point, and wide around scattered rays (environment samples,
+/// diffuse bounces), where it visits far more nodes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Coherence {
+    /// Every packet carries the flag.
+    Coherent,
+    /// No packet does.
+    Incoherent,
+    /// Each packet by its rays, as a renderer that knows its rays would set it: the flag
+    /// when every active lane's direction lies within [`crate::COHERENT_CONE_DEGREES`] of the
+    /// first active lane's.
+    #[default]
+    PerPacket,
+}
+
 /// How the scene is built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct EmbreeParams {
@@ -69,8 +88,8 @@ pub struct EmbreeParams {
     pub robust: bool,
     /// Build threads (`None`: Embree's default, all cores). 1 for a single-thread comparison.
     pub threads: Option<usize>,
-    /// Packets carry Embree's COHERENT query flag (rays of a packet travel together).
-    pub coherent: bool,
+    /// Which packets carry Embree's COHERENT query flag (rays of a packet travel together).
+    pub coherence: Coherence,
     /// Build the scenes with `RTC_SCENE_FLAG_FILTER_FUNCTION_IN_ARGUMENTS`, which only the
     /// all-hits query needs (it records hits through a filter callback). Off, first-hit and
     /// occlusion queries run on scenes without it, and the first all-hits query builds a
@@ -80,14 +99,14 @@ pub struct EmbreeParams {
 
 impl Default for EmbreeParams {
     /// High-quality meshes (they are built once), a fast top level, one build thread: the
-    /// same split of effort as the paper's two-level BSP; coherent packets.
+    /// same split of effort as the paper's two-level BSP; the COHERENT flag per packet.
     fn default() -> Self {
         Self {
             mesh_quality: BuildQuality::High,
             top_quality: BuildQuality::Low,
             robust: false,
             threads: Some(1),
-            coherent: true,
+            coherence: Coherence::PerPacket,
             all_hits: true,
         }
     }
@@ -372,10 +391,15 @@ impl Embree {
         Ok(())
     }
 
-    /// Sets the COHERENT query flag of later packet queries (on for coherent rays such as
-    /// primary and shadow rays; off for incoherent ones, where Embree is faster without it).
+    /// Sets the COHERENT query flag of every later packet query (on for coherent rays such as
+    /// primary and shadow rays; off for incoherent ones, where Embree is faster without it),
+    /// instead of choosing it per packet.
     pub fn set_coherent(&mut self, on: bool) {
-        self.params.coherent = on;
+        self.params.coherence = if on {
+            Coherence::Coherent
+        } else {
+            Coherence::Incoherent
+        };
     }
 
     /// The parameters the scene was built with.
