@@ -5,15 +5,17 @@
 //! the contract's keys keep their order.
 //!
 //! A run of other experiments rewrites `machine.json` but keeps the `embree` line of the
-//! previous one when it was measured on the same CPU: `accel.csv` stays in the folder until
-//! `accel` runs again, and its report reads which Embree it timed from that key.
+//! previous one: `accel.csv` stays in the folder until `accel` runs again, and its report
+//! reads which Embree it timed from that key (on the host `runs` names for `accel`).
 //!
 //! Likewise `runs`: per experiment whose results are in the folder, the source revision
-//! (`git_rev`), the date, the `os` line (its kernel build tells hosts apart) and a speed probe
-//! (`probe_ms`) of the run that wrote them. `--only` runs replace some sections and keep the
-//! others, so the machine's own `git_rev` names only the last run. Hosts that report the same
-//! CPU model differ in speed (this workplace's hosts by up to 1.77x in frame time), so the probe
-//! says whether two experiments' absolute times can be compared.
+//! (`git_rev`), the date, the CPU model (`cpu`), the `os` line (its kernel build tells hosts
+//! apart) and a speed probe (`probe_ms`) of the run that wrote them. `--only` runs replace some
+//! sections and keep the others, so the machine's own keys describe only the last run, and a
+//! folder can hold experiments from hosts of different CPU models: `runs` says which came from
+//! which. Hosts that report the same CPU model differ in speed too (this workplace's hosts by up
+//! to 1.77x in frame time), so the probe says whether two experiments' absolute times can be
+//! compared.
 
 use std::time::Instant;
 
@@ -54,6 +56,8 @@ pub struct RunRecord {
     pub git_rev: String,
     /// Its date (UTC, ISO-8601).
     pub date: String,
+    /// Its host's CPU model; `None` in entries written before it was recorded.
+    pub cpu: Option<String>,
     /// Its host's `os` line; `None` in entries written before it was recorded.
     pub os: Option<String>,
     /// [`speed_probe_ms`] on its host; `None` in entries written before it was recorded.
@@ -99,23 +103,35 @@ pub fn get_key(json: &str, key: &str) -> Option<String> {
     })
 }
 
-/// The `machine.json` a run writes: `machine`'s own keys, `build`, and the `embree` line of
-/// `previous` (the folder's earlier `machine.json`) when that was written on the same CPU.
+/// The `machine.json` a run writes: `machine`'s own keys, `build`, and the `embree` and `runs`
+/// lines of `previous` (the folder's earlier `machine.json`), whose results stay in the folder
+/// until their experiments run again. Entries of `runs` written before the CPU model was
+/// recorded in them get `previous`'s own `cpu`: until then `runs` was dropped whenever the
+/// CPU changed, so every entry of a file was measured on that file's CPU model.
 pub fn machine_json(machine: &Machine, previous: Option<&str>) -> String {
     let mut json = set_key(&machine.to_json(), "build", build_value(machine));
-    if let Some(previous) = previous {
-        let same_cpu = Machine::from_json(previous).is_ok_and(|p| p.cpu == machine.cpu);
-        for key in ["embree", "runs"] {
-            if let (true, Some(value)) = (same_cpu, get_key(previous, key)) {
-                json = set_key(&json, key, &value);
+    let Some(previous) = previous else {
+        return json;
+    };
+    if let Some(value) = get_key(previous, "embree") {
+        json = set_key(&json, "embree", &value);
+    }
+    let old_cpu = Machine::from_json(previous).ok().map(|p| p.cpu);
+    let runs = get_key(previous, "runs").and_then(|v| serde_json::from_str(&v).ok());
+    if let Some(serde_json::Value::Object(mut runs)) = runs {
+        for entry in runs.values_mut() {
+            if let (Some(e), Some(cpu)) = (entry.as_object_mut(), &old_cpu) {
+                e.entry("cpu").or_insert_with(|| cpu.clone().into());
             }
         }
+        json = set_key(&json, "runs", &serde_json::Value::Object(runs).to_string());
     }
     json
 }
 
-/// `json` with `experiment`'s entry of `runs` set to `machine`'s revision, date and `os` and
-/// to `probe_ms` ([`speed_probe_ms`]): the run that has just written that experiment's results.
+/// `json` with `experiment`'s entry of `runs` set to `machine`'s revision, date, CPU model and
+/// `os` and to `probe_ms` ([`speed_probe_ms`]): the run that has just written that
+/// experiment's results.
 pub fn record_run(json: &str, experiment: &str, machine: &Machine, probe_ms: f64) -> String {
     let mut runs: serde_json::Map<String, serde_json::Value> = get_key(json, "runs")
         .and_then(|v| serde_json::from_str(&v).ok())
@@ -125,6 +141,7 @@ pub fn record_run(json: &str, experiment: &str, machine: &Machine, probe_ms: f64
         serde_json::json!({
             "git_rev": machine.git_rev,
             "date": machine.date,
+            "cpu": machine.cpu,
             "os": machine.os,
             "probe_ms": (probe_ms * 100.0).round() / 100.0,
         }),
@@ -146,6 +163,7 @@ pub fn runs(json: &str) -> Vec<RunRecord> {
             experiment: name.clone(),
             git_rev: text(v, "git_rev"),
             date: text(v, "date"),
+            cpu: v["cpu"].as_str().map(str::to_owned),
             os: v["os"].as_str().map(str::to_owned),
             probe_ms: v["probe_ms"].as_f64(),
         })
@@ -178,15 +196,16 @@ mod tests {
         assert_eq!(parsed["embree"]["isa"], "avx2");
         assert_eq!(parsed["cpu"], machine.cpu.as_str());
 
-        // A later run keeps the key on the same CPU and drops it on another.
+        // A later run keeps the key, on this CPU and on another (`accel.csv` stays in the
+        // folder with it; `runs` says which host ran `accel`).
         let kept = machine_json(&machine, Some(&with));
         assert_eq!(get_key(&kept, "embree").as_deref(), Some(embree));
         let mut other = machine.clone();
         other.cpu = "another CPU".into();
         let other_json = set_key(&other.to_json(), "embree", embree);
         assert_eq!(
-            get_key(&machine_json(&machine, Some(&other_json)), "embree"),
-            None
+            get_key(&machine_json(&machine, Some(&other_json)), "embree").as_deref(),
+            Some(embree)
         );
         // The machine's own keys still come first, in the contract's order.
         assert!(kept.find("\"cpu\"").unwrap() < kept.find("\"build\"").unwrap());
@@ -206,41 +225,66 @@ mod tests {
         later.date = "d2".into();
         later.os = "host b".into();
         let json = record_run(&machine_json(&later, Some(&json)), "table1", &later, 37.504);
-        let want = |n: &str, r: &str, d: &str, os: &str, ms: f64| RunRecord {
+        let want = |n: &str, r: &str, d: &str, cpu: &str, os: &str, ms: f64| RunRecord {
             experiment: n.to_owned(),
             git_rev: r.to_owned(),
             date: d.to_owned(),
+            cpu: Some(cpu.to_owned()),
             os: Some(os.to_owned()),
             probe_ms: Some(ms),
         };
+        let cpu = machine.cpu.as_str();
         assert_eq!(
             runs(&json),
             vec![
-                want("kernels", "aaa", "d1", "host a", 25.0),
-                want("table1", "bbb", "d2", "host b", 37.5)
+                want("kernels", "aaa", "d1", cpu, "host a", 25.0),
+                want("table1", "bbb", "d2", cpu, "host b", 37.5)
             ]
         );
         let parsed: serde_json::Value = serde_json::from_str(&json).unwrap();
         assert_eq!(parsed["runs"]["kernels"]["git_rev"], "aaa");
         assert_eq!(parsed["git_rev"], "bbb");
-        // Entries written before `os` and `probe_ms` were recorded still read.
+        // Entries written before `cpu`, `os` and `probe_ms` were recorded still read.
         let old = r#"{
   "runs": {"kernels":{"date":"d0","git_rev":"ccc"}}
 }"#;
-        assert_eq!(
-            runs(old),
-            vec![RunRecord {
-                experiment: "kernels".into(),
-                git_rev: "ccc".into(),
-                date: "d0".into(),
-                os: None,
-                probe_ms: None,
-            }]
-        );
-        // Another CPU's runs are not this one's.
+        let old_record = RunRecord {
+            experiment: "kernels".into(),
+            git_rev: "ccc".into(),
+            date: "d0".into(),
+            cpu: None,
+            os: None,
+            probe_ms: None,
+        };
+        assert_eq!(runs(old), vec![old_record.clone()]);
+        // A run on another CPU keeps the earlier runs, each with the CPU it ran on, and adds
+        // its own.
         let mut other = later.clone();
         other.cpu = "another CPU".into();
-        assert!(runs(&machine_json(&other, Some(&json))).is_empty());
+        other.git_rev = "ddd".into();
+        let mixed = record_run(&machine_json(&other, Some(&json)), "table3", &other, 30.0);
+        assert_eq!(
+            runs(&mixed),
+            vec![
+                want("kernels", "aaa", "d1", cpu, "host a", 25.0),
+                want("table1", "bbb", "d2", cpu, "host b", 37.5),
+                want("table3", "ddd", "d2", "another CPU", "host b", 30.0),
+            ]
+        );
+        // Entries from before the CPU model was recorded get the earlier file's own CPU: they
+        // were all measured on it (runs were dropped whenever the CPU changed).
+        let older = set_key(
+            &machine.to_json(),
+            "runs",
+            r#"{"kernels":{"date":"d0","git_rev":"ccc"}}"#,
+        );
+        assert_eq!(
+            runs(&machine_json(&other, Some(&older))),
+            vec![RunRecord {
+                cpu: Some(machine.cpu.clone()),
+                ..old_record
+            }]
+        );
         assert!(runs("{}").is_empty());
     }
 

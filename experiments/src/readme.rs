@@ -168,6 +168,7 @@ fn machine_section(ctx: &Ctx, problems: &mut Vec<String>) -> String {
                     format!("`{}`", r.experiment),
                     r.git_rev,
                     r.date,
+                    r.cpu.unwrap_or_else(unknown),
                     r.os.unwrap_or_else(unknown),
                     r.probe_ms.map_or_else(unknown, |ms| format!("{ms:.1}")),
                 ]
@@ -176,12 +177,17 @@ fn machine_section(ctx: &Ctx, problems: &mut Vec<String>) -> String {
         md.push_str(&format!(
             "The run that wrote each experiment's results here (`runs` in `machine.json`; \
              sections of experiments not listed come from runs before this record was kept). \
-             Hosts of the same CPU model differ in speed: `probe_ms` is a fixed single-thread \
+             The table above describes the last run's machine only: experiments whose `cpu` \
+             differs from it were measured on another host. Hosts of the same CPU model differ \
+             in speed too: `probe_ms` is a fixed single-thread \
              scalar loop timed when the experiment finished (median of 5), and the `os` line's \
              kernel build tells hosts apart. Ratios within an experiment (speedups, BSP / \
              Embree) come from one run; absolute times of two experiments compare only where \
              their probes agree.\n\n{}\n",
-            markdown_table(&["experiment", "git_rev", "date", "os", "probe_ms"], &rows)
+            markdown_table(
+                &["experiment", "git_rev", "date", "cpu", "os", "probe_ms"],
+                &rows
+            )
         ));
     }
     md
