@@ -19,6 +19,7 @@ pub mod kernels;
 pub mod light;
 pub mod machine;
 pub mod material;
+pub mod median;
 pub mod mesh_file;
 pub mod render;
 pub mod sampler;

@@ -127,6 +127,11 @@ struct RenderArgs {
     /// slows the frame; the split is for comparing stages, not for frame times.
     #[arg(long)]
     stages: bool,
+    /// Render the frame N times in a row and report each frame's seconds and their median
+    /// (as `reproduce` times frames; the image and statistics are the last frame's). The
+    /// first frame of a run also pays for fresh memory.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    frames: u32,
     /// Output image: .exr (HDR radiance) or .png (tone-mapped).
     #[arg(long, short)]
     out: std::path::PathBuf,

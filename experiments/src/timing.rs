@@ -44,20 +44,7 @@ pub fn time<R>(warmup: usize, repeats: usize, mut f: impl FnMut() -> R) -> Timin
     }
 }
 
-/// The median of `v` (the mean of the two middle values for an even count); NaN when empty.
-pub fn median(v: &[f64]) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    let mut v = v.to_vec();
-    v.sort_by(f64::total_cmp);
-    let m = v.len() / 2;
-    if v.len() % 2 == 1 {
-        v[m]
-    } else {
-        0.5 * (v[m - 1] + v[m])
-    }
-}
+pub use coherent::median::median;
 
 /// `baseline / seconds`: the contract's speedup (scalar seconds of the same group over this
 /// row's seconds); `inf` when `seconds` is 0, `NaN` when either is not a positive time.

@@ -3,12 +3,13 @@
 //! the image, and print one summary line (rays by kind, time, Mrays/s, active lanes per
 //! packet per stage and per ray depth, material passes per packet).
 
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use anyhow::{Context, bail};
 use coherent::accel::Accel;
 use coherent::accel_any::{AccelKind, AnyAccel, AnyParams};
 use coherent::film::{FilmOptions, Method, PassReport};
+use coherent::median::median;
 use coherent::render::{RayKind, Renderer, render_frame};
 use coherent::simd::Backend;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -143,9 +144,17 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             r.rays as f64 * 1e-6
         ));
     };
-    let t_render = Instant::now();
-    let rendered = pool.install(|| render_frame(backend, &renderer, &opts, &progress))?;
-    let seconds = t_render.elapsed();
+    let mut frames = Vec::new();
+    let mut rendered = None;
+    for _ in 0..args.frames {
+        // The last frame's film is dropped before the next frame starts, as in `reproduce`.
+        drop(rendered.take());
+        let t_render = Instant::now();
+        rendered = Some(pool.install(|| render_frame(backend, &renderer, &opts, &progress))?);
+        frames.push(t_render.elapsed().as_secs_f64());
+    }
+    let rendered = rendered.context("no frame rendered")?;
+    let seconds = Duration::from_secs_f64(median(&frames));
     bar.finish_and_clear();
     rendered.write(&args.out)?;
 
@@ -186,6 +195,15 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         (t_build - t_load).as_secs_f64(),
         args.out.display(),
     );
+    if frames.len() > 1 {
+        let each: Vec<String> = frames.iter().map(|s| format!("{s:.4}")).collect();
+        println!(
+            "{} frames: {} s; median {:.4} s (the time above)",
+            frames.len(),
+            each.join(", "),
+            seconds.as_secs_f64()
+        );
+    }
     if args.stages {
         println!(
             "time by stage (the clock read around each stage, its own cost taken out): {}",
