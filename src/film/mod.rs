@@ -8,6 +8,7 @@ mod batch;
 mod matrix;
 mod output;
 mod render;
+mod spare;
 mod superpixel;
 mod tracer;
 

@@ -14,7 +14,7 @@ use rayon::prelude::*;
 
 use super::batch::{PacketIn, trace_packets};
 
-use super::matrix::{Film, FilmBand};
+use super::matrix::{Film, FilmBand, FilmLines};
 use super::superpixel::Superpixels;
 use super::tracer::SampleTracer;
 use super::{
@@ -153,6 +153,7 @@ pub fn render<T: SampleTracer>(
         // band of its row of tiles, locked while one tile files (144 samples at 1 spp). Tiles
         // do not share pixels and a tile files its samples in trace order, so each pixel's
         // sums do not depend on the threads.
+        let lines = film.lines();
         let bands: Vec<Mutex<FilmBand<'_>>> = film
             .bands(tile.height())
             .into_iter()
@@ -172,6 +173,8 @@ pub fn render<T: SampleTracer>(
                     need: need.as_deref(),
                     places: &places,
                     id_base,
+                    tile: (tile.width(), tile.height()),
+                    lines,
                 };
                 pass_tile(backend, tracer, &job, &bands[ty as usize])
             })
@@ -373,10 +376,22 @@ fn mean_error(film: &Film) -> f64 {
 
 /// Fraction of pixels sampled or interpolated (the `done` of pre-render and uniform passes).
 fn covered_fraction(film: &Film) -> f64 {
-    let n = (0..film.pixels())
-        .into_par_iter()
-        .filter(|&p| film.interpolated[p] || film.samples(p) > 0)
-        .count();
+    // In chunks, without branches (the compiler vectorises the count).
+    const CHUNK: usize = 1 << 14;
+    let [a, b] = &film.matrices;
+    let n: usize = film
+        .interpolated
+        .par_chunks(CHUNK)
+        .zip(a.count.par_chunks(CHUNK))
+        .zip(b.count.par_chunks(CHUNK))
+        .map(|((i, ca), cb)| {
+            i.iter()
+                .zip(ca)
+                .zip(cb)
+                .map(|((&i, &ca), &cb)| (i | (ca | cb != 0)) as usize)
+                .sum::<usize>()
+        })
+        .sum();
     n as f64 / film.pixels() as f64
 }
 
@@ -406,6 +421,10 @@ struct PassJob<'a> {
     /// Where index `begin + j` falls in a tile, at `j`.
     places: &'a [Place],
     id_base: u64,
+    /// The tile's size in pixels.
+    tile: (u32, u32),
+    /// The film's lines, prefetched before the tile is traced.
+    lines: FilmLines,
 }
 
 /// Where a Halton index falls in any tile: the pixel in the tile, the offset inside it and
@@ -494,6 +513,13 @@ fn pass_tile<T: SampleTracer>(
             where_.push((pix, knum));
         }
     }
+    // The lines this tile files into, asked for now: they arrive while it is traced.
+    if !packets.is_empty() {
+        let (x0, y0) = job.origin;
+        let x1 = (x0 + job.tile.0).min(job.width);
+        let y1 = (y0 + job.tile.1).min(job.height);
+        job.lines.prefetch(x0, x1, y0, y1);
+    }
     let (colours, stats) = trace_packets(backend, tracer, &packets)?;
     let mut out = TileOut {
         fixups: Fixups::default(),
@@ -522,16 +548,21 @@ fn pass_tile<T: SampleTracer>(
             }
         }
         if n >= 2 {
-            let (cx, cy) = (cx / n as f64, cy / n as f64);
-            for m in 0..lanes {
-                if bits >> m & 1 == 1 {
-                    let (dx, dy) = (p.xs[m] as f64 - cx, p.ys[m] as f64 - cy);
-                    let d = (dx * dx + dy * dy).sqrt();
-                    out.dist_sum += d;
-                    out.dist_n += 1;
-                    out.dist_max = out.dist_max.max(d);
-                }
+            // Every lane's distance, in `f32` and kept under the mask: a loop without
+            // branches that the compiler vectorises (a branch and an `f64` square root per
+            // lane took 2 ms of a 1024 x 768 frame).
+            let (cx, cy) = ((cx / n as f64) as f32, (cy / n as f64) as f32);
+            let (mut sum, mut max) = (0.0f32, 0.0f32);
+            for m in 0..MAX_LANES {
+                let (dx, dy) = (p.xs[m] - cx, p.ys[m] - cy);
+                let d = (dx * dx + dy * dy).sqrt();
+                let on = bits >> m & 1 == 1;
+                sum += if on { d } else { 0.0 };
+                max = if on { max.max(d) } else { max };
             }
+            out.dist_sum += sum as f64;
+            out.dist_n += n as u64;
+            out.dist_max = out.dist_max.max(max as f64);
             out.multi_groups += 1;
         }
     }

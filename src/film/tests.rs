@@ -401,3 +401,16 @@ fn matrices_split_each_pair_of_samples() {
         assert!((10..=40).contains(&firsts), "pixel {p}: {firsts} of 50");
     }
 }
+
+#[test]
+fn a_film_after_another_of_its_size_starts_from_zero() {
+    let t = Analytic::new(edge);
+    let opts = FilmOptions::new(29, 17, Method::Uniform { spp: 2 });
+    let first = render(Backend::Scalar, &t, &opts, &quiet).unwrap();
+    let image = first.image();
+    // Its matrices are kept for the next film of this size, which zeroes them.
+    drop(first);
+    let second = render(Backend::Scalar, &t, &opts, &quiet).unwrap();
+    assert!((0..second.film.pixels()).all(|p| second.film.samples(p) == 2));
+    assert_eq!(second.image(), image);
+}
