@@ -1,9 +1,9 @@
 //! The screen matrices of the last film dropped, kept for the next film of the same size.
 //!
 //! A film's matrices are its largest allocation (25 MB at 1024 x 768), and fresh memory costs
-//! a page fault per 4 KiB page on its first write: zeroing fresh matrices took 10-22 ms of a
-//! single-thread 1024 x 768 `cornell_pov` frame whose tracing took 64 ms (avx512), more than a
-//! fifth of it, run to run. A program that renders frame after frame (an animation, the
+//! a page fault per 4 KiB page on its first write: zeroing fresh matrices took 10-60 ms, run to
+//! run, of a single-thread 1024 x 768 `cornell_pov` frame whose tracing took 64 ms (avx512).
+//! A program that renders frame after frame (an animation, the
 //! timed frames of `reproduce`) now zeroes the pages it already has, about 1 ms. At most one
 //! set is kept: the memory of the last film, held until the next film takes it (or one of
 //! another size replaces it).
