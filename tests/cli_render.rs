@@ -106,6 +106,47 @@ fn stages_prints_the_time_of_each_pipeline_stage() {
 }
 
 #[test]
+fn frames_renders_several_frames_and_reports_their_median() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cornell.png");
+    let args = |frames: &str| {
+        coherent(&[
+            "render",
+            "cornell",
+            "--resolution",
+            "32x24",
+            "--spp",
+            "1",
+            "--threads",
+            "1",
+            "--quiet",
+            "--frames",
+            frames,
+            "--out",
+            path.to_str().unwrap(),
+        ])
+    };
+    let out = args("3");
+    assert!(out.status.success(), "{}", text(&out));
+    let all = text(&out);
+    let line = all
+        .lines()
+        .find(|l| l.starts_with("3 frames: "))
+        .unwrap_or_else(|| panic!("no frames line:\n{all}"));
+    let times: Vec<f64> = line["3 frames: ".len()..line.find(" s;").unwrap()]
+        .split(", ")
+        .map(|t| t.parse().unwrap())
+        .collect();
+    assert_eq!(times.len(), 3, "{line}");
+    assert!(times.iter().all(|t| *t > 0.0), "{line}");
+    for bad in ["0", "x"] {
+        let out = args(bad);
+        assert!(!out.status.success(), "--frames {bad} accepted");
+        assert!(text(&out).contains("--frames"), "{}", text(&out));
+    }
+}
+
+#[test]
 fn bad_input_fails_with_a_message() {
     let dir = tempfile::tempdir().unwrap();
     let png = dir.path().join("x.png");
