@@ -11,6 +11,25 @@ fn coherent(args: &[&str]) -> Output {
         .expect("the coherent binary runs")
 }
 
+/// `coherent render cornell` at 32 x 24, 1 spp, one thread, quiet, into `out`, with `extra`.
+fn render_cornell(out: &std::path::Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "render",
+        "cornell",
+        "--resolution",
+        "32x24",
+        "--spp",
+        "1",
+        "--threads",
+        "1",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    coherent(&args)
+}
+
 fn text(o: &Output) -> String {
     format!(
         "{}{}",
@@ -45,19 +64,7 @@ fn a_built_in_scene_renders_to_png_and_exr_with_a_summary() {
     let dir = tempfile::tempdir().unwrap();
     for file in ["cornell.png", "cornell.exr"] {
         let path = dir.path().join(file);
-        let out = coherent(&[
-            "render",
-            "cornell",
-            "--resolution",
-            "32x24",
-            "--spp",
-            "1",
-            "--threads",
-            "1",
-            "--quiet",
-            "--out",
-            path.to_str().unwrap(),
-        ]);
+        let out = render_cornell(&path, &[]);
         assert!(out.status.success(), "{}", text(&out));
         let written = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
         assert!(written > 0, "{file} not written:\n{}", text(&out));
@@ -74,21 +81,7 @@ fn stages_prints_the_time_of_each_pipeline_stage() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("cornell.exr");
     let run = |extra: &[&str]| {
-        let mut args = vec![
-            "render",
-            "cornell",
-            "--resolution",
-            "32x24",
-            "--spp",
-            "1",
-            "--threads",
-            "1",
-            "--quiet",
-            "--out",
-            path.to_str().unwrap(),
-        ];
-        args.extend_from_slice(extra);
-        let out = coherent(&args);
+        let out = render_cornell(&path, extra);
         assert!(out.status.success(), "{}", text(&out));
         text(&out)
     };
@@ -109,23 +102,7 @@ fn stages_prints_the_time_of_each_pipeline_stage() {
 fn frames_renders_several_frames_and_reports_their_median() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("cornell.png");
-    let args = |frames: &str| {
-        coherent(&[
-            "render",
-            "cornell",
-            "--resolution",
-            "32x24",
-            "--spp",
-            "1",
-            "--threads",
-            "1",
-            "--quiet",
-            "--frames",
-            frames,
-            "--out",
-            path.to_str().unwrap(),
-        ])
-    };
+    let args = |frames: &str| render_cornell(&path, &["--frames", frames]);
     let out = args("3");
     assert!(out.status.success(), "{}", text(&out));
     let all = text(&out);
