@@ -42,14 +42,14 @@ pub const DEFAULT_SAMPLES: u32 = 16;
 struct Map {
     width: usize,
     height: usize,
-    /// Radiance, one plane per channel (`rgb[c * w * h + j * w + i]`).
-    rgb: Vec<f32>,
+    /// Per texel `j * w + i`, its radiance and its density over the unit square of map
+    /// coordinates, side by side: `texels[4 (j * w + i) ..][..4]` is `[r, g, b, pdf]`. A
+    /// sample reads all four of its texel, from one cache line instead of four planes'.
+    texels: Vec<f32>,
     /// Marginal CDF over rows: `h + 1` values, 0 to 1.
     marginal: Vec<f32>,
     /// Conditional CDFs per row: `h` runs of `w + 1` values, 0 to 1.
     conditional: Vec<f32>,
-    /// Density per texel over the unit square of map coordinates.
-    pdf: Vec<f32>,
     /// Guide tables of the marginal CDF (`row_buckets + 1` entries) and of each row's
     /// conditional CDF (`h` runs of `col_buckets + 1`): see [`guide`].
     marginal_guide: Vec<u32>,
@@ -183,12 +183,6 @@ impl Environment {
             })?;
         let ey = ez.cross(ex);
         let (w, h) = (width, height);
-        let mut rgb = vec![0.0f32; 3 * w * h];
-        for (k, t) in texels.iter().enumerate() {
-            for c in 0..3 {
-                rgb[c * w * h + k] = t[c] * scale;
-            }
-        }
         // Weights: luminance times sin(theta) at the row's centre (the solid angle of a
         // texel), so that bright and large texels are drawn more often.
         let mut conditional = Vec::with_capacity(h * (w + 1));
@@ -214,22 +208,24 @@ impl Environment {
         }
         // Density over the unit square: the probability of the texel (product of its row's
         // and its column's CDF steps, as sampled) times w h.
-        let mut pdf = vec![0.0f32; w * h];
+        let mut interleaved = vec![0.0f32; 4 * w * h];
         for j in 0..h {
             let pr = (marginal[j + 1] - marginal[j]) as f64;
             for i in 0..w {
                 let pc = (conditional[j * (w + 1) + i + 1] - conditional[j * (w + 1) + i]) as f64;
-                pdf[j * w + i] = (pr * pc * (w * h) as f64) as f32;
+                let k = j * w + i;
+                let [r, g, b] = texels[k].map(|c| c * scale);
+                let pdf = (pr * pc * (w * h) as f64) as f32;
+                interleaved[4 * k..4 * k + 4].copy_from_slice(&[r, g, b, pdf]);
             }
         }
         Ok(Environment {
             map: Arc::new(Map {
                 width: w,
                 height: h,
-                rgb,
+                texels: interleaved,
                 marginal,
                 conditional,
-                pdf,
                 marginal_guide,
                 conditional_guide,
                 row_buckets,
@@ -374,12 +370,11 @@ impl Environment {
     #[inline(always)]
     pub fn radiance<L: Lanes>(&self, l: L, dir: &Vec3s<L>) -> Rgbs<L> {
         let m = &*self.map;
-        let t = self.texel(l, dir);
-        let n = m.width * m.height;
+        let t = self.texel(l, dir) << 2;
         Rgbs::new(
-            l.gather(&m.rgb[..n], t),
-            l.gather(&m.rgb[n..2 * n], t),
-            l.gather(&m.rgb[2 * n..], t),
+            l.gather(&m.texels, t),
+            l.gather(&m.texels[1..], t),
+            l.gather(&m.texels[2..], t),
         )
     }
 
@@ -390,7 +385,7 @@ impl Environment {
         let t = self.texel(l, &Vec3s::splat(l, dir)).lane(0) as usize;
         let z = dir.dot(self.axes[2]).clamp(-1.0, 1.0);
         let sin_dir = (1.0 - z * z).sqrt().max(f32::MIN_POSITIVE);
-        m.pdf[t] / (2.0 * std::f32::consts::PI * std::f32::consts::PI * sin_dir)
+        m.texels[4 * t + 3] / (2.0 * std::f32::consts::PI * std::f32::consts::PI * sin_dir)
     }
 
     /// Sample `k` per lane: an importance-drawn direction in stratum `k` (of
@@ -454,17 +449,16 @@ impl Environment {
             Vec3s::splat(l, self.axes[2]),
         ];
         let wi = ax[0].mul_add(st * cp, ax[1].mul_add(st * sp, ax[2] * ct));
-        let texel = j * l.splat_i32(w as i32) + i;
-        let pdf = l.gather(&m.pdf, texel);
+        let texel = (j * l.splat_i32(w as i32) + i) << 2;
+        let pdf = l.gather(&m.texels[3..], texel);
         // li = L / (pdf_omega * samples), pdf_omega = pdf / (2 pi^2 sin(theta)).
         let weight =
             st * (2.0 * std::f32::consts::PI * std::f32::consts::PI / self.samples as f32) / pdf;
         let active = active & n.dot(wi).gt(zero) & pdf.gt(zero) & st.gt(zero);
-        let nn = w * h;
         let li = Rgbs::new(
-            l.gather(&m.rgb[..nn], texel) * weight,
-            l.gather(&m.rgb[nn..2 * nn], texel) * weight,
-            l.gather(&m.rgb[2 * nn..], texel) * weight,
+            l.gather(&m.texels, texel) * weight,
+            l.gather(&m.texels[1..], texel) * weight,
+            l.gather(&m.texels[2..], texel) * weight,
         );
         finish(l, n, active, wi, l.splat(f32::INFINITY), li)
     }
