@@ -522,6 +522,45 @@ mod tests {
         Environment::new("varied", w, h, &t, 1.0, Vec3::Z, Vec3::X, 64).unwrap()
     }
 
+    /// Each texel's record holds its own three channels and its density, in that order:
+    /// the direction through every texel's centre sees that texel's radiance, and its density
+    /// is the product of the texel's row and column CDF steps.
+    #[test]
+    fn every_texel_centre_sees_its_own_channels_and_density() {
+        let env = varied();
+        let m = &*env.map;
+        let (w, h) = (m.width, m.height);
+        let l = coherent_simd::scalar::Scalar;
+        for j in 0..h {
+            for i in 0..w {
+                let theta = std::f32::consts::PI * (j as f32 + 0.5) / h as f32;
+                let phi = std::f32::consts::TAU * (i as f32 + 0.5) / w as f32;
+                let d = theta.sin() * (phi.cos() * Vec3::X + phi.sin() * Vec3::Y)
+                    + theta.cos() * Vec3::Z;
+                let spot = if (10..13).contains(&i) && (3..5).contains(&j) {
+                    50.0
+                } else {
+                    0.0
+                };
+                let want = [0.1 + i as f32 * 0.01 + spot, 0.2 + spot, 0.05 * j as f32];
+                assert_eq!(
+                    env.radiance(l, &Vec3s::splat(l, d)).lane(0),
+                    want,
+                    "({i}, {j})"
+                );
+                let pr = m.marginal[j + 1] - m.marginal[j];
+                let row = &m.conditional[j * (w + 1)..];
+                let pdf = pr * (row[i + 1] - row[i]) * (w * h) as f32;
+                let sin = (1.0 - d.z * d.z).sqrt();
+                let got = env.pdf1(d) * 2.0 * std::f32::consts::PI * std::f32::consts::PI * sin;
+                assert!(
+                    (got - pdf).abs() <= 1e-4 * pdf,
+                    "({i}, {j}): {got} vs {pdf}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn the_sampling_pdf_integrates_to_one_over_the_sphere() {
         for env in [
