@@ -97,6 +97,59 @@ impl Ref<'_> {
         border || bound || sliver || grazing
     }
 
+    /// Whether `r` passes so close to some triangle that an exact test may count it as a hit
+    /// although the reference finds none: the line meets the triangle's plane inside
+    /// `[tmin, tmax]` (or at a bound, [`same_t`]) at a point whose barycentrics, computed in
+    /// f64, are each no further outside than the border band of [`Self::fuzzy`]. Rays the
+    /// tests aim at a vertex or an edge meet this; an occlusion answer is then free to go either
+    /// way, as a fuzzy hit's is (an occlusion query reports no hit, so there is none to judge).
+    fn near_miss(&self, r: &Ray1) -> bool {
+        let d64 = |v: Vec3| v.as_dvec3();
+        let (o, d) = (d64(r.origin), d64(r.dir));
+        self.scene.instances.iter().enumerate().any(|(i, inst)| {
+            let mesh = &self.scene.meshes[inst.mesh];
+            (0..mesh.indices.len()).any(|prim| {
+                let probe = Hit1 {
+                    t: 0.0,
+                    u: 0.0,
+                    v: 0.0,
+                    prim: prim as u32,
+                    inst: i as u32,
+                };
+                let [a, b, c] = self.triangle(&probe).map(d64);
+                let (e1, e2) = (b - a, c - a);
+                let p = d.cross(e2);
+                let det = e1.dot(p);
+                if det == 0.0 || !det.is_finite() {
+                    return false;
+                }
+                let s = o - a;
+                let q = s.cross(e1);
+                let (u, v, t) = (s.dot(p) / det, d.dot(q) / det, e2.dot(q) / det);
+                let h = Hit1 {
+                    t: t as f32,
+                    u: u as f32,
+                    v: v as f32,
+                    ..probe
+                };
+                let inside_segment =
+                    (h.t >= r.tmin || same_t(h.t, r.tmin)) && (h.t < r.tmax || same_t(h.t, r.tmax));
+                // Each barycentric no further outside than the border band: `l` times the
+                // height over the opposite edge is the signed distance to that edge.
+                let area2 = e1.cross(e2).length();
+                let tol = f64::from(self.tolerance(&h, r));
+                let band = |l: f64, opposite: f64| {
+                    let height = area2 / opposite;
+                    l * height >= -(4.0 * f64::from(EDGE_EPS) * height + tol)
+                };
+                inside_segment
+                    && band(1.0 - u - v, (c - b).length())
+                    && band(u, (a - c).length())
+                    && band(v, (b - a).length())
+            })
+        })
+    }
+
     /// `a` and `b` are the same hit of `r`: the same triangle, and the points at `t` and at
     /// the barycentrics within 1e-5 of the distances involved, divided by the cosine of the
     /// incidence (`t` of a glancing hit is known to no better).
@@ -180,7 +233,14 @@ fn check_occluded(
 ) -> Result<(), String> {
     let solid = |hits: &[Hit1]| hits.iter().any(|h| !c.fuzzy(h, r));
     let agree = got != want.is_empty();
-    if agree || (!got && !solid(want)) || (got && !got_hits.is_empty() && !solid(got_hits)) {
+    // Occluded where the reference finds no hit: fine where the accelerator's own hits are
+    // fuzzy, or where the ray grazes a triangle's border (`Ref::near_miss`).
+    let grazes = || want.is_empty() && c.near_miss(r);
+    if agree
+        || (!got && !solid(want))
+        || (got && !got_hits.is_empty() && !solid(got_hits))
+        || (got && grazes())
+    {
         Ok(())
     } else {
         Err(format!("{r:?}: occluded {got}, reference hits {want:?}"))
@@ -512,17 +572,18 @@ accel_backends!(obvhs_bvh2, Which::Obvhs(coherent::obvhs::Kind::Bvh2));
 #[cfg(feature = "obvhs")]
 accel_backends!(obvhs_cwbvh, Which::Obvhs(coherent::obvhs::Kind::Cwbvh));
 
-/// A case the random scenes found (fresh-clone CI run of 96c582f), kept here rather than in
-/// the regression seeds: Embree 4.4's 16-wide packet occlusion (`rtcOccluded16`, with the
-/// COHERENT flag and without it) reports lane 4's ray, origin (14.51, 6.00, -5.52), direction
-/// (-48.50, -15.17, 9.39), `t` in [0, 10.76), as occluded, while Embree's single-ray occlusion,
-/// its packet first-hit and all-hits queries and brute force find no hit on the whole line.
-/// Not understood yet; ignored so that it does not fail every run. Run it with
-/// `cargo test --test accel_equivalence -- --ignored`.
+/// A case the random scenes found (fresh-clone CI run of 96c582f): Embree 4.4's packet
+/// occlusion (`rtcOccluded4/8/16`, with the COHERENT flag and without it) reports a ray as
+/// occluded, origin (14.51, 6.00, -5.52), direction (-48.50, -15.17, 9.39), `t` in [0, 10.76),
+/// on which its single-ray occlusion, its first-hit and all-hits queries and brute force find
+/// no hit. The ray is one the tests aim at a vertex: in f64 it meets the plane of a triangle of
+/// the identity instance at `t` = 0.41 with barycentrics u = -6.5e-7, v = 2.6e-8, just outside
+/// the vertex. Embree's packet kernel rounds that in, its single-ray kernel (which it also
+/// takes for a packet with one active lane) rounds it out. No hit is reported to judge as
+/// fuzzy, so the occlusion check looks for such a near miss itself (`Ref::near_miss`).
 #[cfg(feature = "embree")]
 #[test]
-#[ignore = "Embree 4.4's packet occlusion disagrees with brute force here; not understood yet"]
-fn embree_packet_occlusion_on_an_empty_line() {
+fn embree_packet_occlusion_at_a_vertex() {
     on(
         Backend::Wide16,
         RandomScene {
@@ -533,4 +594,27 @@ fn embree_packet_occlusion_on_an_empty_line() {
             instances: 5,
         },
     );
+}
+
+/// The near-miss band is narrow: a ray through a vertex a hair outside is in it, a ray a
+/// hundredth of the triangle outside, or one whose segment ends before the plane, is not.
+#[test]
+fn near_miss_is_a_narrow_band() {
+    let scene = Scene::single(Mesh::new(
+        "one",
+        vec![
+            Vec3::ZERO,
+            Vec3::new(4.0, 0.0, 0.0),
+            Vec3::new(0.0, 4.0, 0.0),
+        ],
+        vec![[0, 1, 2]],
+    ));
+    let c = Ref { scene: &scene };
+    let at = |p: Vec3, tmax: f32| Ray1::new(p + Vec3::new(0.0, 0.0, 3.0), -Vec3::Z, 0.0, tmax);
+    assert!(c.near_miss(&at(Vec3::new(-1e-6, -1e-6, 0.0), f32::INFINITY)));
+    assert!(c.near_miss(&at(Vec3::new(2.0, 2.0 + 1e-6, 0.0), f32::INFINITY)));
+    assert!(c.near_miss(&at(Vec3::new(1.0, 1.0, 0.0), f32::INFINITY)));
+    assert!(!c.near_miss(&at(Vec3::new(-0.04, 1.0, 0.0), f32::INFINITY)));
+    assert!(!c.near_miss(&at(Vec3::new(2.03, 2.0, 0.0), f32::INFINITY)));
+    assert!(!c.near_miss(&at(Vec3::new(1.0, 1.0, 0.0), 2.0)));
 }
