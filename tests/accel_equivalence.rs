@@ -27,8 +27,8 @@
 use std::sync::OnceLock;
 
 use coherent_accel::shapes::Rng;
-use coherent_accel::testing::{random_rays, random_scene, same_t};
-use coherent_accel::{Accel, BruteForce, EDGE_EPS, Hit1, Mesh, Ray1, Rays, Scene};
+use coherent_accel::testing::{one_triangle, random_rays, random_scene, same_t};
+use coherent_accel::{Accel, BruteForce, EDGE_EPS, Hit1, Ray1, Rays, Scene};
 use coherent_bsp::{Bsp, BspParams};
 use coherent_simd::{Backend, Kernel, Lanes, SimdMask};
 use glam::Vec3;
@@ -380,15 +380,7 @@ impl Kernel for EdgeCases {
         let empty = Scene::default();
         let bf = BruteForce::build(&empty, &()).unwrap();
         check_which(l, self.0, &bf, &empty, &random_rays(1, &empty, 16), 1)?;
-        let tri = Scene::single(Mesh::new(
-            "one",
-            vec![
-                Vec3::ZERO,
-                Vec3::new(4.0, 0.0, 0.0),
-                Vec3::new(0.0, 4.0, 0.0),
-            ],
-            vec![[0, 1, 2]],
-        ));
+        let tri = one_triangle();
         let mut rays = vec![];
         for p in [
             Vec3::ZERO,
@@ -600,15 +592,7 @@ fn embree_packet_occlusion_at_a_vertex() {
 /// hundredth of the triangle outside, or one whose segment ends before the plane, is not.
 #[test]
 fn near_miss_is_a_narrow_band() {
-    let scene = Scene::single(Mesh::new(
-        "one",
-        vec![
-            Vec3::ZERO,
-            Vec3::new(4.0, 0.0, 0.0),
-            Vec3::new(0.0, 4.0, 0.0),
-        ],
-        vec![[0, 1, 2]],
-    ));
+    let scene = one_triangle();
     let c = Ref { scene: &scene };
     let at = |p: Vec3, tmax: f32| Ray1::new(p + Vec3::new(0.0, 0.0, 3.0), -Vec3::Z, 0.0, tmax);
     assert!(c.near_miss(&at(Vec3::new(-1e-6, -1e-6, 0.0), f32::INFINITY)));

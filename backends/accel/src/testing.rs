@@ -64,6 +64,20 @@ pub fn random_scene(seed: u64, tris: usize, meshes: usize, instances: usize) -> 
     scene
 }
 
+/// One triangle in the plane z = 0, legs of 4 along x and y: the edge-case tests aim rays at
+/// its vertices, edges and inside.
+pub fn one_triangle() -> Scene {
+    Scene::single(crate::Mesh::new(
+        "one",
+        vec![
+            Vec3::ZERO,
+            Vec3::new(4.0, 0.0, 0.0),
+            Vec3::new(0.0, 4.0, 0.0),
+        ],
+        vec![[0, 1, 2]],
+    ))
+}
+
 /// Random rays at a scene: from a box around it, random or axis-parallel directions, some
 /// aimed at triangle vertices, edges and interiors, some with finite `tmax` or `tmin > 0`.
 pub fn random_rays(seed: u64, scene: &Scene, n: usize) -> Vec<Ray1> {

@@ -57,15 +57,7 @@ pub fn edge_cases<L: Lanes>(l: L) {
     check(&Scene::single(flat), &rays);
 
     // One triangle: axis-parallel rays through its vertices, edges and inside, and along it.
-    let tri = Scene::single(Mesh::new(
-        "one",
-        vec![
-            Vec3::ZERO,
-            Vec3::new(4.0, 0.0, 0.0),
-            Vec3::new(0.0, 4.0, 0.0),
-        ],
-        vec![[0, 1, 2]],
-    ));
+    let tri = one_triangle();
     let mut rays = vec![];
     for p in [
         Vec3::ZERO,
