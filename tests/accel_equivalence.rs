@@ -570,8 +570,9 @@ accel_backends!(obvhs_cwbvh, Which::Obvhs(coherent::obvhs::Kind::Cwbvh));
 /// on which its single-ray occlusion, its first-hit and all-hits queries and brute force find
 /// no hit. The ray is one the tests aim at a vertex: in f64 it meets the plane of a triangle of
 /// the identity instance at `t` = 0.41 with barycentrics u = -6.5e-7, v = 2.6e-8, just outside
-/// the vertex. Embree's packet kernel rounds that in, its single-ray kernel (which it also
-/// takes for a packet with one active lane) rounds it out. No hit is reported to judge as
+/// the vertex. Embree's packet occlusion rounds that in when another lane of the packet is
+/// active (one that is occluded, in the smallest case found: 4, 8 and 16 wide alike); alone
+/// in a packet, and as a single ray, the ray is rounded out. No hit is reported to judge as
 /// fuzzy, so the occlusion check looks for such a near miss itself (`Ref::near_miss`).
 #[cfg(feature = "embree")]
 #[test]
