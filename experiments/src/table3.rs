@@ -42,6 +42,7 @@ pub const EXPERIMENT: Experiment = Experiment {
     plots: &[
         "table3_speedup",
         "table3_breakdown",
+        "table3_stage_efficiency",
         "table3_coherence",
         "table3_light_samples",
     ],
@@ -505,6 +506,45 @@ fn plots(ctx: &Ctx) -> anyhow::Result<()> {
                 series,
             },
         )?;
+        // Each stage's speedup over scalar per lane, median over the scenes, for the
+        // hand-written backends: 1 is the full width.
+        let scenes = t.distinct("scene")?;
+        let mut categories: Vec<String> = STAGES.iter().map(|s| s.to_string()).collect();
+        categories.push("frame".into());
+        let mut series = Vec::new();
+        for be in PLOTTED {
+            let mut per_stage = vec![Vec::new(); categories.len()];
+            for s in &scenes {
+                if let Some(StageSpeedups {
+                    stages,
+                    frame,
+                    lanes,
+                }) = stage_speedups(&t, s, be)?
+                {
+                    for (i, x) in stages.iter().enumerate() {
+                        if let Some(x) = x {
+                            per_stage[i].push(x / lanes as f64);
+                        }
+                    }
+                    per_stage[STAGES.len()].push(frame / lanes as f64);
+                }
+            }
+            if per_stage.iter().any(|v| !v.is_empty()) {
+                let v = per_stage.iter().map(|v| median(v)).collect();
+                series.push((be.to_owned(), v));
+            }
+        }
+        if !series.is_empty() {
+            ctx.bar_chart(
+                "table3_stage_efficiency",
+                &BarChart {
+                    title: "Each stage's speedup over scalar per lane (BSP, median over scenes; 1 = the full width)".into(),
+                    y_label: "speedup / lanes".into(),
+                    categories,
+                    series,
+                },
+            )?;
+        }
     }
     if let Some(t) = ctx.read_csv(COHERENCE_FILE, COHERENCE_HEADER)?
         && !t.rows.is_empty()
@@ -816,6 +856,112 @@ fn breakdown_md(ctx: &Ctx, b: &Table) -> anyhow::Result<String> {
     if let Some(p) = ctx.plot_markdown("table3_breakdown", "share of frame time per stage") {
         md.push_str(&p);
     }
+    md.push_str(&stage_speedups_md(b)?);
+    if let Some(p) = ctx.plot_markdown(
+        "table3_stage_efficiency",
+        "each stage's speedup over scalar per lane",
+    ) {
+        md.push_str(&p);
+    }
+    Ok(md)
+}
+
+/// Seconds per stage of one scene and backend in the breakdown, in [`STAGES`] order (`None`
+/// where a stage has no row), and their sum.
+fn stage_seconds(b: &Table, scene: &str, backend: &str) -> anyhow::Result<([Option<f64>; 7], f64)> {
+    let mut out = [None; 7];
+    let mut total = 0.0;
+    for (i, stage) in STAGES.iter().enumerate() {
+        if let Some(r) = find(
+            b,
+            &[("scene", scene), ("backend", backend), ("stage", stage)],
+        )? {
+            let s = b.f64(r, "seconds")?;
+            out[i] = Some(s);
+            total += s;
+        }
+    }
+    Ok((out, total))
+}
+
+/// One scene and backend of the breakdown against the scalar backend.
+#[derive(Debug, PartialEq)]
+struct StageSpeedups {
+    /// Each stage's speedup over the scalar backend's same stage, in [`STAGES`] order.
+    stages: [Option<f64>; 7],
+    /// The whole breakdown frame's speedup.
+    frame: f64,
+    lanes: usize,
+}
+
+/// Per scene and backend: each stage's speedup over the scalar backend's same stage (the
+/// breakdown frames) and the whole breakdown frame's. `None` for the scalar rows and for
+/// backends whose name is unknown.
+fn stage_speedups(b: &Table, scene: &str, backend: &str) -> anyhow::Result<Option<StageSpeedups>> {
+    let Ok(be) = backend.parse::<Backend>() else {
+        return Ok(None);
+    };
+    if be.lanes() == 1 {
+        return Ok(None);
+    }
+    let (base, base_total) = stage_seconds(b, scene, "scalar")?;
+    let (this, total) = stage_seconds(b, scene, backend)?;
+    if base_total <= 0.0 || total <= 0.0 {
+        return Ok(None);
+    }
+    let mut out = [None; 7];
+    for i in 0..STAGES.len() {
+        if let (Some(a), Some(t)) = (base[i], this[i])
+            && t > 0.0
+        {
+            out[i] = Some(a / t);
+        }
+    }
+    Ok(Some(StageSpeedups {
+        stages: out,
+        frame: base_total / total,
+        lanes: be.lanes(),
+    }))
+}
+
+fn stage_speedups_md(b: &Table) -> anyhow::Result<String> {
+    let mut md = String::from(
+        "\nEach stage's speedup over the scalar backend's same stage (the frames above), and \
+         the whole frame's as a share of the lane count. A packet of N lanes that does the \
+         work of its N rays with one instruction stream gains at most N over them one at a \
+         time: a frame reaches N x only if every stage does, and beyond that only where a \
+         packet does less work than its rays alone. The stages below the lane count are where \
+         a frame's speedup is lost:\n\n",
+    );
+    let mut rows = Vec::new();
+    for s in b.distinct("scene")? {
+        for be in b.distinct("backend")? {
+            let Some(StageSpeedups {
+                stages,
+                frame,
+                lanes,
+            }) = stage_speedups(b, &s, &be)?
+            else {
+                continue;
+            };
+            let mut row = vec![s.clone(), be.clone(), lanes.to_string()];
+            row.extend(
+                stages
+                    .iter()
+                    .map(|x| x.map_or_else(|| "—".into(), |v| format!("{v:.2}"))),
+            );
+            row.push(format!("{frame:.2}"));
+            row.push(format!("{:.0}", 100.0 * frame / lanes as f64));
+            rows.push(row);
+        }
+    }
+    if rows.is_empty() {
+        return Ok(String::new());
+    }
+    let mut header = vec!["scene", "backend", "lanes"];
+    header.extend(STAGES);
+    header.extend(["frame", "frame / lanes, %"]);
+    md.push_str(&markdown_table(&header, &rows));
     Ok(md)
 }
 
@@ -997,8 +1143,46 @@ intensity = [10, 10, 10]
         }
         let md = report(&ctx).unwrap().unwrap();
         assert!(md.contains("table3_light_samples.csv"), "{md}");
+        if simd != Backend::Scalar {
+            assert!(md.contains("frame / lanes, %"), "{md}");
+        }
         assert!(md.contains("images/table3_ball.png"), "{md}");
         assert!(md.contains("scene broken"), "{md}");
         assert!(ctx.path("images/table3_ball.png").is_file());
+    }
+
+    #[test]
+    fn stage_speedups_divide_by_the_scalar_stage() {
+        let row = |b: &str, stage: &str, s: f64| {
+            vec![
+                "x".into(),
+                b.into(),
+                stage.into(),
+                s.to_string(),
+                "0".into(),
+            ]
+        };
+        let t = Table {
+            file: "table3_breakdown.csv".into(),
+            header: BREAKDOWN_HEADER.iter().map(|h| h.to_string()).collect(),
+            rows: vec![
+                row("scalar", "traversal", 4.0),
+                row("scalar", "shading", 4.0),
+                row("sse", "traversal", 2.0),
+                row("sse", "shading", 1.0),
+            ],
+        };
+        assert!(stage_speedups(&t, "x", "scalar").unwrap().is_none());
+        assert!(
+            stage_speedups(&t, "x", "no-such-backend")
+                .unwrap()
+                .is_none()
+        );
+        let x = stage_speedups(&t, "x", "sse").unwrap().unwrap();
+        assert_eq!(x.stages[..3], [Some(2.0), None, Some(4.0)]);
+        assert_eq!((x.frame, x.lanes), (8.0 / 3.0, 4));
+        let md = stage_speedups_md(&t).unwrap();
+        assert!(md.contains("| x | sse | 4 | 2.00 | — | 4.00 |"), "{md}");
+        assert!(md.contains("| 2.67 | 67 |"), "{md}");
     }
 }
