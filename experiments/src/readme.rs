@@ -35,16 +35,21 @@ pub fn render(ctx: &Ctx, registry: &[Experiment], run: &RunInfo) -> (String, Vec
          results). Timings are medians of repeated runs and are meant as ratios within one run \
          on one machine (the `speedup` columns); absolute seconds depend on the machine below.\n\n",
     );
-    let ran = if run.ran.is_empty() {
-        "none".to_owned()
-    } else {
-        run.ran.join(", ")
-    };
     let command = format!("reproduce {}", run.args);
-    md.push_str(&format!(
-        "Last run: `{}`, which ran: {ran}.\n\n",
-        command.trim_end()
-    ));
+    let command = command.trim_end();
+    if run.ran.is_empty() {
+        // `--report-only`: nothing was measured; say so, and where the measuring runs are.
+        md.push_str(&format!(
+            "Last written by `{command}`, which ran no experiment: this report and the plots \
+             were redrawn from the CSV files. The runs that measured them are listed under the \
+             machine table.\n\n"
+        ));
+    } else {
+        md.push_str(&format!(
+            "Last run: `{command}`, which ran: {}.\n\n",
+            run.ran.join(", ")
+        ));
+    }
 
     md.push_str("## Machine\n\n");
     md.push_str(&machine_section(ctx, &mut problems));
@@ -343,6 +348,18 @@ mod tests {
         assert!(md.contains("[demo](#demo--a-demonstration)"), "{md}");
         assert!(dir.path().join("plots/demo.png").is_file());
         assert!(dir.path().join("plots/demo.svg").is_file());
+
+        // Redrawn without running anything (`--report-only`): said as such.
+        let redrawn = RunInfo {
+            ran: Vec::new(),
+            args: "--report-only".into(),
+        };
+        let (md, _) = render(&ctx, &registry, &redrawn);
+        assert!(
+            md.contains("Last written by `reproduce --report-only`, which ran no experiment"),
+            "{md}"
+        );
+        assert!(md.contains("| exp | wide8 | 8 | 0.0666 | 7.50 |"), "{md}");
 
         // A damaged CSV is reported in the README, not hidden.
         std::fs::write(ctx.path("demo.csv"), "wrong,header\n").unwrap();

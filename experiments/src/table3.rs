@@ -928,9 +928,9 @@ fn stage_speedups_md(b: &Table) -> anyhow::Result<String> {
     let mut md = String::from(
         "\nEach stage's speedup over the scalar backend's same stage (the frames above), and \
          the whole frame's as a share of the lane count. A packet of N lanes that does the \
-         work of its N rays with one instruction stream gains at most N over them one at a \
-         time: a frame reaches N x only if every stage does, and beyond that only where a \
-         packet does less work than its rays alone. The stages below the lane count are where \
+         work of its N rays with one instruction stream gains at most N times over them one \
+         at a time, unless it does less work than its rays alone: a frame gains N times only \
+         if every stage does. The stages below the lane count are where \
          a frame's speedup is lost:\n\n",
     );
     let mut rows = Vec::new();
