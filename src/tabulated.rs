@@ -498,13 +498,19 @@ impl<const D: usize> Grid<D> {
         }
         let span = pair_offsets[(1 << (D - 1)) - 1] + 2;
         let one = l.splat(1.0);
+        // The last axis's lerp joins each pair as soon as it is read, so that 2^(D-1)
+        // values, not 2^D, wait for the other axes: the same operations on the same values
+        // (bit for bit as before), fewer of them live at once (`bdf_anisotropic`, Intel
+        // host: sse 28.8-29.5 -> 27.4-27.5 ms, pulp8 17.8-18.0 -> 16.1-16.3; avx2 the same).
+        let t_last = cells[D - 1].t;
+        let s_last = one - t_last;
         let channels = out.len().min(self.channels);
         for c in 0..channels {
             let plane = &self.planes[c * self.nodes..(c + 1) * self.nodes];
             // The 2^D corners, lerped down one axis at a time, last axis first (corner bit
             // 0 is the last axis, so corners `2p` and `2p + 1` are neighbouring nodes:
-            // one read serves both).
-            let mut v = [l.splat(0.0); 16];
+            // one read serves both, and their lerp gives `v[p]`).
+            let mut v = [l.splat(0.0); 8];
             if splat && L::N == 1 {
                 // One lane (the scalar baseline): its cell's nodes as one slice, one range
                 // check instead of one per pair (10-12% faster there; used for packets too,
@@ -512,8 +518,8 @@ impl<const D: usize> Grid<D> {
                 let cell = &plane[bases[0]..bases[0] + span];
                 for pair in 0..1 << (D - 1) {
                     let off = pair_offsets[pair];
-                    v[2 * pair] = l.splat(cell[off]);
-                    v[2 * pair + 1] = l.splat(cell[off + 1]);
+                    let (lo, hi) = (l.splat(cell[off]), l.splat(cell[off + 1]));
+                    v[pair] = lo.mul_add(s_last, hi * t_last);
                 }
             } else if splat {
                 for pair in 0..1 << (D - 1) {
@@ -528,19 +534,17 @@ impl<const D: usize> Grid<D> {
                         lo = masks[j].select(l.splat(block[0]), lo);
                         hi = masks[j].select(l.splat(block[1]), hi);
                     }
-                    v[2 * pair] = lo;
-                    v[2 * pair + 1] = hi;
+                    v[pair] = lo.mul_add(s_last, hi * t_last);
                 }
             } else {
                 for pair in 0..1 << (D - 1) {
                     let corner = base + l.splat_i32(self.corner_offsets[2 * pair]);
                     let (lo, hi) = l.gather2(plane, corner);
-                    v[2 * pair] = lo;
-                    v[2 * pair + 1] = hi;
+                    v[pair] = lo.mul_add(s_last, hi * t_last);
                 }
             }
-            let mut n = 1usize << D;
-            for k in (0..D).rev() {
+            let mut n = 1usize << (D - 1);
+            for k in (0..D - 1).rev() {
                 let t = cells[k].t;
                 let s = one - t;
                 n /= 2;
