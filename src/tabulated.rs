@@ -501,7 +501,8 @@ impl<const D: usize> Grid<D> {
         // The last axis's lerp joins each pair as soon as it is read, so that 2^(D-1)
         // values, not 2^D, wait for the other axes: the same operations on the same values
         // (bit for bit as before), fewer of them live at once (`bdf_anisotropic`, Intel
-        // host: sse 28.8-29.5 -> 27.4-27.5 ms, pulp8 17.8-18.0 -> 16.1-16.3; avx2 the same).
+        // host, six runs against two: sse 28.8-29.5 -> 27.2-27.5 ms, pulp8 17.8-18.0 -> 15.9-16.6,
+        // pulp16 9.5-10.0 -> 7.7-8.3; avx2 14.3-14.9 -> 14.1-14.5).
         let t_last = cells[D - 1].t;
         let s_last = one - t_last;
         let channels = out.len().min(self.channels);
