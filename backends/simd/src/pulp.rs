@@ -27,8 +27,8 @@
 //! - `floor`/`round`: `f32::floor` / `f32::round_ties_even` through an array, lanes without a
 //!   fraction kept as they are;
 //! - `i32 -> f32`: `as f32` through an array;
-//! - `f32 -> i32` (truncating, out of range to `i32::MIN`): `to_int_unchecked` under a range
-//!   check through an array;
+//! - `f32 -> i32` (truncating, out of range to `i32::MIN`): `to_int_unchecked` under the
+//!   check `|x| < 2^31` through an array (one compare where a range needs two);
 //! - arithmetic `>>`: the logical shift of `x ^ sign` xor `sign`;
 //! - `min`/`max`: `if a < b { a } else { b }` through arrays (pulp's `min_f32s` follows the
 //!   target's NaN rule, not the trait's);
@@ -70,17 +70,49 @@ impl<S: Simd> PulpLanes<S> {
     }
     /// `table[idx[i]]` per lane (the indices already checked, `table.len() >= 2`) as the
     /// upper value of the pair at `idx - 1` (the lower of the pair at 0 where `idx` is 0),
-    /// read by [`Lanes::gather2`]'s loop of 8-byte words. LLVM makes a 64-bit hardware gather
-    /// of that loop at 16 lanes on AVX-512, while a loop of 4-byte loads stays sixteen loads
-    /// and inserts: 2.2x the time of `vgatherdps` on an Intel Xeon host (a scratch program,
-    /// 2^20 random lookups in a 256 KiB table: 0.95 -> 0.45-0.46 ms; `avx512` 0.39-0.44 ms).
+    /// read by [`PulpLanes::words`]. LLVM makes a 64-bit hardware gather of that loop at 16
+    /// lanes on AVX-512, while a loop of 4-byte loads stays sixteen loads and inserts: 2.2x
+    /// the time of `vgatherdps` on an Intel Xeon host (a scratch program, 2^20 random lookups
+    /// in a 256 KiB table: 0.95 -> 0.45-0.46 ms; `avx512` 0.39-0.44 ms).
     #[inline(always)]
     fn gather_by_pairs(self, table: &[f32], idx: PI32<S>) -> PF32<S> {
         let s = self.0;
         let one = s.splat_i32s(1);
-        let below = PI32(s.sub_i32s(s.max_i32s(idx.0, one), one), s);
-        let (lo, hi) = self.gather2(table, below);
+        // `idx < table.len()` was checked, so `below + 1 <= max(idx, 1) < table.len()`.
+        let below = PI32(s.sub_i32s(s.max_i32s(idx.0, one), one), s).to_array();
+        let (lo, hi) = self.split_words(&self.words(table, &below));
         PM32(s.equal_i32s(idx.0, s.splat_i32s(0)), s).select(lo, hi)
+    }
+    /// The 8-byte words `table[ix[i]..ix[i] + 2]` per lane, unaligned. The caller has checked
+    /// that every `ix[i] + 1` lies inside `table`.
+    #[inline(always)]
+    fn words(self, table: &[f32], ix: &[i32; MAX_LANES]) -> [u64; MAX_LANES] {
+        let mut words = [0u64; MAX_LANES];
+        for (w, &j) in words.iter_mut().zip(ix).take(Self::N) {
+            debug_assert!(j >= 0 && (j as usize) + 1 < table.len());
+            // SAFETY: the caller checked `0 <= j` and `j + 1 < table.len()`: both floats of
+            // the pair lie in `table`, read as one unaligned 8-byte word.
+            *w = unsafe { (table.as_ptr().add(j as usize) as *const u64).read_unaligned() };
+        }
+        words
+    }
+    /// Each word's float at the lower address and the one above it.
+    #[inline(always)]
+    fn split_words(self, words: &[u64; MAX_LANES]) -> (PF32<S>, PF32<S>) {
+        let mut lo = [0.0f32; MAX_LANES];
+        let mut hi = [0.0f32; MAX_LANES];
+        for i in 0..Self::N {
+            // the float at the lower address is the word's low half on little-endian targets
+            let (a, b) = (words[i] as u32, (words[i] >> 32) as u32);
+            let (a, b) = if cfg!(target_endian = "little") {
+                (a, b)
+            } else {
+                (b, a)
+            };
+            lo[i] = f32::from_bits(a);
+            hi[i] = f32::from_bits(b);
+        }
+        (self.load(&lo), self.load(&hi))
     }
 }
 
@@ -348,27 +380,7 @@ impl<S: Simd> Lanes for PulpLanes<S> {
             }
             return (self.load(&lo), self.load(&hi));
         }
-        let mut pairs = [0u64; MAX_LANES];
-        for i in 0..Self::N {
-            let j = ix[i] as usize;
-            // SAFETY: `checked` proved `j + 1 < table.len()`: both floats of the pair lie
-            // in `table`, read as one unaligned 8-byte word.
-            pairs[i] = unsafe { (table.as_ptr().add(j) as *const u64).read_unaligned() };
-        }
-        let mut lo = [0.0f32; MAX_LANES];
-        let mut hi = [0.0f32; MAX_LANES];
-        for i in 0..Self::N {
-            // the float at the lower address is the word's low half on little-endian targets
-            let (a, b) = (pairs[i] as u32, (pairs[i] >> 32) as u32);
-            let (a, b) = if cfg!(target_endian = "little") {
-                (a, b)
-            } else {
-                (b, a)
-            };
-            lo[i] = f32::from_bits(a);
-            hi[i] = f32::from_bits(b);
-        }
-        (self.load(&lo), self.load(&hi))
+        self.split_words(&self.words(table, &ix))
     }
 }
 
@@ -492,15 +504,18 @@ impl<S: Simd> SimdF32 for PF32<S> {
     }
     /// Lane by lane through an array (pulp has no conversion): truncation where the value is
     /// in `i32`'s range, `i32::MIN` elsewhere (NaN, infinities), as x86's `cvttps2dq`; LLVM
-    /// compiles the loop into the vector conversion and one select. Not the scalar backend's
-    /// `f32_to_i32_x86`: its `as i32` keeps LLVM's saturation code in the vector loop, which
-    /// made pulp8's exp 2.8x the avx2 time instead of 1.4x.
+    /// compiles the loop into the vector conversion and one select. The test is `|x| < 2^31`:
+    /// `-2^31`, the one value in range it leaves out, truncates to `i32::MIN` anyway, and one
+    /// compare replaces the two of a range (pulp8 / avx2 on `exp_poly`, which reads no table:
+    /// 1.24-1.26 -> 1.14-1.15, Intel host). Not the scalar backend's `f32_to_i32_x86`: its
+    /// `as i32` keeps LLVM's saturation code in the vector loop, which made pulp8's exp 2.8x
+    /// the avx2 time instead of 1.4x.
     #[inline(always)]
     fn to_i32(self) -> PI32<S> {
         let a = self.to_array();
         let mut out = [0i32; MAX_LANES];
         for (o, &x) in out.iter_mut().zip(&a).take(S::F32_LANES) {
-            *o = if (-2_147_483_648.0..2_147_483_648.0).contains(&x) {
+            *o = if x.abs() < 2_147_483_648.0 {
                 // SAFETY: `x` is finite and truncates to a value inside `i32`'s range.
                 unsafe { x.to_int_unchecked::<i32>() }
             } else {
