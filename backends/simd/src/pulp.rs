@@ -331,7 +331,7 @@ impl<S: Simd> Lanes for PulpLanes<S> {
         PM32(s.equal_i32s(b, lanes), s)
     }
     /// Lane by lane through an array (pulp has no gather), after one vector bounds check; at
-    /// 16 lanes through [`Lanes::gather2`]'s 8-byte words (see [`PulpLanes::gather_by_pairs`]).
+    /// 16 lanes as halves of 8-byte words (see [`PulpLanes::gather_by_pairs`]).
     #[inline(always)]
     fn gather(self, table: &[f32], idx: PI32<S>) -> PF32<S> {
         let ix = idx.checked(table.len());
@@ -520,7 +520,7 @@ impl<S: Simd> SimdF32 for PF32<S> {
     /// compiles the loop into the vector conversion and one select. The test is `|x| < 2^31`:
     /// `-2^31`, the one value in range it leaves out, truncates to `i32::MIN` anyway, and one
     /// compare replaces the two of a range (pulp8 / avx2 on `exp_poly`, which reads no table:
-    /// 1.24-1.26 -> 1.14-1.15, Intel host). Not the scalar backend's `f32_to_i32_x86`: its
+    /// 1.24-1.26 -> 1.10-1.14, Intel host). Not the scalar backend's `f32_to_i32_x86`: its
     /// `as i32` keeps LLVM's saturation code in the vector loop, which made pulp8's exp 2.8x
     /// the avx2 time instead of 1.4x.
     #[inline(always)]
