@@ -47,7 +47,7 @@ if [[ -n "$report" ]]; then
     echo "check-inlining: $n function(s) in $bin call AVX intrinsics or libm rounding out of line (calls, function):"
     echo "$report"
     echo "Inline them into the kernel (#[inline(always)] functions; no closures called twice," \
-        "no array::map over lanes; see 'Kernels inside pulp must inline' in the README)." >&2
+        "no array::map over lanes; see the inlining rules in docs/architecture.md)." >&2
     exit 1
 fi
 echo "check-inlining: no out-of-line AVX intrinsic or libm rounding calls in $bin"
