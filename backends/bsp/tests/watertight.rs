@@ -14,10 +14,11 @@
 //! The bound: at most [`MILLION_RAY_LEAKS`] leak in 7 * 10^6 rays per backend (scalar, sse,
 //! avx512) and query form (single-ray, packet), with `EDGE_EPS = 2^-13` (without the
 //! tolerance 557,830), and none that brute force does not share: the BSP adds no leaks of its
-//! own. The one leak is the same ray on every backend, a grazing one in the torus. The remaining leaks come from the projection test itself: for a ray meeting a
-//! triangle's plane at a grazing angle, the rounding of the hit distance moves the projected
-//! point by more than the tolerance. A watertight test (shared edge functions, Woop et al.
-//! 2013) would remove them at about twice the arithmetic per test; the paper's test is kept.
+//! own. The one leak is the same ray on every backend, a grazing one in the torus. It comes
+//! from the projection test itself: for a ray meeting a triangle's plane at a grazing angle,
+//! the rounding of the hit distance moves the projected point by more than the tolerance. A
+//! watertight test (shared edge functions, Woop et al. 2013) would remove it at about twice
+//! the arithmetic per test; the paper's test is kept.
 
 use coherent_accel::shapes::{Rng, cuboid, icosphere, torus, uv_sphere};
 use coherent_accel::{Accel, BruteForce, Instance, Mesh, Ray1, Rays, Scene};
@@ -211,7 +212,8 @@ fn million_rays() {
         }
         assert!(
             singles <= MILLION_RAY_LEAKS && packets <= MILLION_RAY_LEAKS,
-            "{}: leaks over 7 * 10^6 rays: single {singles}, packet {packets} (at most {MILLION_RAY_LEAKS})",
+            "{}: leaks over 7 * 10^6 rays: single {singles}, packet {packets} \
+             (at most {MILLION_RAY_LEAKS})",
             b.name()
         );
         total += singles + packets;
