@@ -22,6 +22,7 @@ pub mod material;
 pub mod median;
 pub mod mesh_file;
 pub mod render;
+pub mod require;
 pub mod sampler;
 pub mod scene;
 pub mod tabulated;

@@ -460,7 +460,7 @@ impl Kernel for RealMeshes {
         let scenes = match real_scenes() {
             Ok(s) => s,
             // Meshes come from Debian packages; scripts/test.sh fetches them and asks for them.
-            Err(e) if std::env::var_os("COHERENT_REQUIRE_MESHES").is_none() => {
+            Err(e) if !coherent::require::required("COHERENT_REQUIRE_MESHES") => {
                 eprintln!("skipping the real-mesh check: {e}");
                 return Ok(());
             }

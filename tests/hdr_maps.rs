@@ -1,8 +1,10 @@
 //! The environment light on real HDR maps (paper section 5, Figure 5's panorama): the eight
 //! CC0 studio-light worlds of Debian's blender-data, DWAB-compressed OpenEXR, fetched by
 //! `python3 scripts/native.py hdr` into `.cache/hdr/`. Each loads, and its importance-sampled
-//! irradiance matches a brute-force sum over its texels. Without the files the test says
-//! so and checks nothing, unless `COHERENT_REQUIRE_HDR=1` (set by `scripts/test.sh`).
+//! irradiance (4096 samples) is within 5% of a brute-force sum over its texels, for three
+//! normals. Measured: at most 0.05% for the upward normal, up to 2.4% for the tilted ones
+//! (interior and sunrise). Without the files the test says so and checks nothing, unless
+//! `COHERENT_REQUIRE_HDR` is set (`scripts/test.sh` sets it).
 
 use std::path::Path;
 
@@ -51,7 +53,7 @@ fn blender_world_maps_load_and_their_sampled_irradiance_matches_the_texel_sum() 
     maps.sort();
     if maps.is_empty() {
         let why = "no HDR maps in .cache/hdr (run `python3 scripts/native.py hdr`)";
-        if std::env::var("COHERENT_REQUIRE_HDR").is_ok_and(|v| v == "1") {
+        if coherent::require::required("COHERENT_REQUIRE_HDR") {
             panic!("{why}");
         }
         eprintln!("skipping: {why}");

@@ -2,7 +2,7 @@
 //! EULUMDAT examples of the lidrs crate and six manufacturers' EULUMDAT files from the
 //! eulumdat package, fetched by `python3 scripts/native.py photometry` into
 //! `.cache/photometry/` (pinned, checksummed, data only). Without them the tests say so
-//! and check nothing, unless `COHERENT_REQUIRE_PHOTOMETRY=1` (set by `scripts/test.sh`,
+//! and check nothing, unless `COHERENT_REQUIRE_PHOTOMETRY` is set (by `scripts/test.sh`,
 //! which runs the set-up first), when they fail.
 
 use std::path::{Path, PathBuf};
@@ -30,7 +30,7 @@ fn files_or_skip() -> Option<Vec<PathBuf>> {
     let f = files();
     if f.is_none() {
         let why = "no goniodiagram files in .cache/photometry (run `python3 scripts/native.py photometry`)";
-        if std::env::var("COHERENT_REQUIRE_PHOTOMETRY").is_ok_and(|v| v == "1") {
+        if coherent::require::required("COHERENT_REQUIRE_PHOTOMETRY") {
             panic!("{why}");
         }
         eprintln!("skipping: {why}");

@@ -873,12 +873,12 @@ fn gltf_obj_and_ply_files_of_one_mesh_render_the_same_image() {
 /// Every scene file in `scenes/` loads and renders a small image, finite and not black, on
 /// scalar + BSP and on the widest SIMD backend this CPU runs (within 40 dB of scalar). A
 /// scene whose fetched assets are missing is skipped with its name and the message saying
-/// how to fetch them; with `COHERENT_REQUIRE_SCENES=1` (set by `scripts/test.sh`) that fails
+/// how to fetch them; with `COHERENT_REQUIRE_SCENES` set (by `scripts/test.sh`) that fails
 /// instead, except for a scene fetched only on request (the dungeon: a 257 MB download).
 #[test]
 fn every_scene_file_renders() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let require = std::env::var("COHERENT_REQUIRE_SCENES").is_ok_and(|v| v == "1");
+    let require = coherent::require::required("COHERENT_REQUIRE_SCENES");
     let mut files: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -901,7 +901,7 @@ fn every_scene_file_renders() {
             Err(e) if e.is_missing_asset() => {
                 assert!(
                     !require || e.is_on_demand_asset(),
-                    "scene {name}: {e} (COHERENT_REQUIRE_SCENES=1)"
+                    "scene {name}: {e} (COHERENT_REQUIRE_SCENES is set)"
                 );
                 eprintln!("skipping scene {name}: {e}");
                 continue;

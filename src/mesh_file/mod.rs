@@ -289,7 +289,7 @@ mod tests {
                     );
                 }
                 Err(e @ MeshFileError::NotFetched { .. })
-                    if std::env::var_os("COHERENT_REQUIRE_MESHES").is_none() =>
+                    if !crate::require::required("COHERENT_REQUIRE_MESHES") =>
                 {
                     eprintln!("skipping {}: {e}", m.name)
                 }
