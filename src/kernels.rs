@@ -4,7 +4,7 @@
 //! Each packet's input goes through `std::hint::black_box`, on every backend alike, so that
 //! LLVM cannot vectorise the scalar backend's loop across iterations: the scalar baseline
 //! stays one value at a time, as the paper's non-SSE code was (checked in the assembly; see
-//! the README's "Scalar baseline" note).
+//! docs/findings/scalar-baseline.md).
 
 use std::hint::black_box;
 

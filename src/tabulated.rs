@@ -249,8 +249,8 @@ impl Axis {
                 // outcomes (`Lanes::pick8`: selects, or a lane permute where the backend has
                 // one), not by a gather, which waits for level 3's outcome and then for
                 // memory. Measured (`kernels`, BDF, Zen 4): avx2 5.4x -> 5.9-6.1x over
-                // the scalar loop as it was then (it got faster since); the README has the
-                // rest.
+                // the scalar loop as it was then (it got faster since);
+                // docs/findings/backends.md has the rest.
                 if L::N >= 8 && h.len() > 3 {
                     let probe = l.pick8(&self.fourth_nodes, hit0, hit1, hit2);
                     let probe_inv = l.pick8(&self.fourth_invs, hit0, hit1, hit2);
@@ -515,9 +515,10 @@ impl<const D: usize> Grid<D> {
             if splat && L::N == 1 {
                 // One lane (the scalar baseline): its cell's nodes as one slice, one range
                 // check instead of one per pair (10-12% faster there; used for packets too,
-                // it made sse and pulp 5-8% slower: see README). All corners are read before
-                // the first lerp: in that order LLVM's SLP vectoriser packs 80 operations of
-                // one call, as before the packets' pair-first lerp, not 50.
+                // it made sse and pulp 5-8% slower: see docs/findings/scalar-baseline.md).
+                // All corners are read before the first lerp: in that order LLVM's SLP
+                // vectoriser packs 80 operations of one call, as before the packets'
+                // pair-first lerp, not 50.
                 let cell = &plane[bases[0]..bases[0] + span];
                 let mut corners = [(l.splat(0.0), l.splat(0.0)); 8];
                 for pair in 0..1 << (D - 1) {

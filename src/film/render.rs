@@ -3,7 +3,7 @@
 //! each calling `Backend::run`), accumulated in a fixed order so that the image does not
 //! depend on the thread count.
 
-// Per-packet code uses index loops over lanes (see the README's notes on pulp).
+// Per-packet code uses index loops over lanes (see docs/architecture.md#inlining).
 #![allow(clippy::needless_range_loop)]
 
 use std::sync::Mutex;

@@ -2,7 +2,7 @@
 //! both the low-resolution pre-render of tone mapping (section 6.1) and the values that
 //! pixels of smooth superpixels are bilinearly interpolated from.
 
-// Per-packet code uses index loops over lanes (see the README's notes on pulp).
+// Per-packet code uses index loops over lanes (see docs/architecture.md#inlining).
 #![allow(clippy::needless_range_loop)]
 
 use super::accuracy::display_difference;

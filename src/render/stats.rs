@@ -102,8 +102,8 @@ impl StageClock {
 ///
 /// It is an estimate: in a tight loop of laps the clock reads overlap each other less, or
 /// more, than between a stage's instructions. The renderer's frames with the stage clocks
-/// on against the same frames with them off show how close it comes (the README's
-/// paragraph on `--stages`, under "Rendering").
+/// on against the same frames with them off show how close it comes (docs/findings/packets.md,
+/// "the stage clocks add up to the frame").
 pub fn lap_overhead_ns() -> f64 {
     static NS: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
     *NS.get_or_init(|| {

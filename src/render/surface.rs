@@ -6,7 +6,7 @@
 //! served by the same gathers.
 
 // Index loops in per-packet code: it must inline into the backends' `#[target_feature]`
-// entry points (see the README).
+// entry points (see docs/architecture.md#inlining).
 #![allow(clippy::needless_range_loop)]
 
 use coherent_accel::Hits;

@@ -13,7 +13,7 @@
 //! Luminance is Rec. 709 luminance of the radiance, read as cd/m^2. Colours keep their
 //! chromaticity: every channel is scaled by `L_display / L`.
 
-// Per-packet code uses index loops over lanes (see the README's notes on pulp).
+// Per-packet code uses index loops over lanes (see docs/architecture.md#inlining).
 #![allow(clippy::needless_range_loop)]
 
 use core::fmt;

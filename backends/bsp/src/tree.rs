@@ -52,7 +52,8 @@ impl KdTree {
     /// leaves a single shadow or diffuse ray visits, 4.1 of a primary ray's 4.7. With the
     /// bits, the single-ray walk skips them at their parent (no load, no stack entry). The
     /// packet walk still enters them: skipping there measured within the code-layout noise
-    /// (README, "Tried and measured"). Both builders call this last.
+    /// (docs/findings/traversal.md, "two changes to the single-ray walk"). Both builders call
+    /// this last.
     pub fn mark_empty_children(&mut self) {
         let empty = |n: Node| n.is_leaf() && n.items().is_empty();
         for i in 0..self.nodes.len() {
