@@ -10,7 +10,9 @@
 use coherent_accel::Aabb;
 use glam::Vec3;
 
+use crate::build_binned::PARALLEL_MIN;
 use crate::clip::clipped_bounds;
+use crate::params::BuildPreset;
 use crate::{KdTree, MAX_CHILD, MAX_INDEX, Node, SahParams, TreeStats};
 
 /// Event kinds, in their sort order at equal positions: ends before planars before starts.
@@ -70,23 +72,72 @@ struct Plane {
     cost: f32,
 }
 
+/// A (sub)tree being built: nodes (the root at 0, padding at 1, children pairs at even
+/// indices), leaf item lists and statistics.
+#[derive(Debug)]
+pub(crate) struct Out {
+    pub nodes: Vec<Node>,
+    pub items: Vec<u32>,
+    pub stats: TreeStats,
+}
+
+impl Out {
+    /// A tree whose root (node 0) is still to be built.
+    pub fn new() -> Self {
+        Self {
+            nodes: vec![Node::leaf(0, 0); 2],
+            items: Vec::new(),
+            stats: TreeStats::default(),
+        }
+    }
+}
+
+/// What every node of one tree's build shares.
+#[derive(Clone, Copy)]
+pub(crate) struct Ctx<'a> {
+    pub tris: &'a [[Vec3; 3]],
+    pub p: &'a SahParams,
+    pub depth_limit: u32,
+    /// The root voxel's area: SAH costs are relative to it.
+    pub root_area: f64,
+}
+
+impl<'a> Ctx<'a> {
+    pub fn new(tris: &'a [[Vec3; 3]], p: &'a SahParams, bounds: &Aabb) -> Self {
+        Self {
+            tris,
+            p,
+            depth_limit: p.depth_limit(tris.len()),
+            root_area: bounds.area().max(f32::MIN_POSITIVE) as f64,
+        }
+    }
+}
+
 struct Builder<'a> {
-    tris: &'a [[Vec3; 3]],
-    boxes: Vec<Aabb>,
+    c: Ctx<'a>,
     p: &'a SahParams,
-    depth_limit: u32,
+    /// The triangle (index into `c.tris`) of each local id the events carry.
+    ids: Vec<u32>,
+    /// Per local id: the triangle's box (a subtree's: its part in the subtree's voxel).
+    boxes: Vec<Aabb>,
     side: Vec<u8>,
-    nodes: Vec<Node>,
-    items: Vec<u32>,
-    stats: TreeStats,
-    root_area: f64,
+    out: &'a mut Out,
     /// Event lists no longer used, for reuse (allocation was a sixth of the build time).
     pool: Vec<Vec<u64>>,
 }
 
-/// Builds the kd-tree of triangles `tris` (non-degenerate); leaf items are indices into it.
-/// At most 2^30 - 1 triangles (checked by mesh validation).
+/// Builds the kd-tree of triangles `tris` (non-degenerate) with the split search
+/// [`SahParams::build`] selects; leaf items are indices into `tris`. At most 2^30 - 1
+/// triangles (checked by mesh validation).
 pub fn build_sah(tris: &[[Vec3; 3]], p: &SahParams) -> KdTree {
+    match p.build {
+        BuildPreset::Exact => build_exact(tris, p),
+        BuildPreset::Fast => crate::build_binned::build_binned(tris, p),
+    }
+}
+
+/// The exact sweep at every node ([`BuildPreset::Exact`]), whatever `p.build` says.
+fn build_exact(tris: &[[Vec3; 3]], p: &SahParams) -> KdTree {
     let t0 = std::time::Instant::now();
     let n = tris.len();
     assert!(n <= MAX_INDEX, "{n} triangles: more than a tree can index");
@@ -95,6 +146,46 @@ pub fn build_sah(tris: &[[Vec3; 3]], p: &SahParams) -> KdTree {
     }
     let boxes: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(*t)).collect();
     let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+    let c = Ctx::new(tris, p, &bounds);
+    let mut out = Out::new();
+    let mut spare = p.ref_budget(n) - n;
+    sweep(
+        c,
+        &mut out,
+        0,
+        bounds,
+        (0..n as u32).collect(),
+        boxes,
+        0,
+        &mut spare,
+    );
+    let mut stats = out.stats;
+    stats.build_seconds = t0.elapsed().as_secs_f64();
+    let mut tree = KdTree {
+        nodes: out.nodes,
+        items: out.items,
+        bounds,
+        stats,
+    };
+    tree.mark_empty_children();
+    tree
+}
+
+/// Builds node `node` of `out` (already allocated) over voxel `v` by the exact sweep, down
+/// to its leaves: triangles `ids` (into `c.tris`) with `boxes`, their parts in `v`. Splits
+/// may add at most `spare` references (clipped copies); what they add is taken from it.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn sweep(
+    c: Ctx,
+    out: &mut Out,
+    node: usize,
+    v: Aabb,
+    ids: Vec<u32>,
+    boxes: Vec<Aabb>,
+    depth: u32,
+    spare: &mut usize,
+) {
+    let n = ids.len();
     let mut ev: [Vec<u64>; 3] = core::array::from_fn(|_| Vec::with_capacity(2 * n));
     for (i, b) in boxes.iter().enumerate() {
         push_events(&mut ev, b, i as u32);
@@ -103,50 +194,53 @@ pub fn build_sah(tris: &[[Vec3; 3]], p: &SahParams) -> KdTree {
         list.sort_unstable();
     }
     let mut b = Builder {
-        tris,
+        c,
+        p: c.p,
+        ids,
         boxes,
-        p,
-        depth_limit: p.depth_limit(n),
         side: vec![BOTH; n],
-        nodes: vec![Node::leaf(0, 0); 2],
-        items: Vec::new(),
-        stats: TreeStats::default(),
-        root_area: bounds.area().max(f32::MIN_POSITIVE) as f64,
+        out,
         pool: Vec::new(),
     };
-    b.build(0, bounds, ev, n, 0);
-    let mut stats = b.stats;
-    stats.build_seconds = t0.elapsed().as_secs_f64();
-    let mut tree = KdTree {
-        nodes: b.nodes,
-        items: b.items,
-        bounds,
-        stats,
-    };
-    tree.mark_empty_children();
-    tree
+    b.build(node, v, ev, n, depth, spare);
 }
 
 impl Builder<'_> {
-    fn build(&mut self, node: usize, v: Aabb, ev: [Vec<u64>; 3], n: usize, depth: u32) {
+    fn build(
+        &mut self,
+        node: usize,
+        v: Aabb,
+        ev: [Vec<u64>; 3],
+        n: usize,
+        depth: u32,
+        spare: &mut usize,
+    ) {
         let g = self.p.leaf_group.max(1) as usize;
         let leaf_cost = self.p.intersection_cost * n.div_ceil(g) as f32;
-        let plane = if n as u32 <= self.p.leaf_size || depth >= self.depth_limit {
+        let plane = if n as u32 <= self.p.leaf_size || depth >= self.c.depth_limit {
             None
         } else {
             self.find_plane(&v, &ev, n)
         };
-        let Some(plane) = plane.filter(|pl| pl.cost < leaf_cost) else {
+        let plane = plane.filter(|pl| pl.cost < leaf_cost).filter(|pl| {
+            // Each straddling triangle adds at most one reference: past the budget, a leaf.
+            self.classify(&ev, pl);
+            let both = ev[0]
+                .iter()
+                .filter(|&&e| kind(e) != END && self.side[tri(e) as usize] == BOTH)
+                .count();
+            both <= *spare
+        });
+        let Some(plane) = plane else {
             self.leaf(node, &v, &ev[0], depth);
             self.give(ev);
             return;
         };
-        let area = v.area() as f64 / self.root_area;
-        self.stats.nodes += 1;
-        self.stats.sah_cost += area * self.p.traversal_cost as f64;
+        let area = v.area() as f64 / self.c.root_area;
+        self.out.stats.nodes += 1;
+        self.out.stats.sah_cost += area * self.p.traversal_cost as f64;
 
         let (k, pos) = (plane.axis, plane.pos);
-        self.classify(&ev, &plane);
         let mut vl = v;
         vl.max[k] = pos;
         let mut vr = v;
@@ -200,13 +294,27 @@ impl Builder<'_> {
         }
         self.give(new_l);
         self.give(new_r);
-        let children = self.nodes.len();
+        let children = self.out.nodes.len();
         assert!(children < MAX_CHILD, "kd-tree too large");
-        self.nodes.push(Node::leaf(0, 0));
-        self.nodes.push(Node::leaf(0, 0));
-        self.nodes[node] = Node::inner(k, pos, children);
-        self.build(children, vl, left, nl, depth + 1);
-        self.build(children + 1, vr, right, nr, depth + 1);
+        self.out.nodes.push(Node::leaf(0, 0));
+        self.out.nodes.push(Node::leaf(0, 0));
+        self.out.nodes[node] = Node::inner(k, pos, children);
+        // At most `both` more: `nl + nr <= n + both`.
+        *spare = *spare + n - (nl + nr);
+        if n < PARALLEL_MIN {
+            self.build(children, vl, left, nl, depth + 1, spare);
+            self.build(children + 1, vr, right, nr, depth + 1, spare);
+        } else {
+            // As the fast build does at these sizes (there in parallel): the left subtree may
+            // spend only its share of what is left, so that a budget run out does not turn
+            // the whole right side into leaves; the right one gets the rest and what the
+            // left leaves.
+            let mut sl = share(*spare, nl, nr);
+            let rest = *spare - sl;
+            self.build(children, vl, left, nl, depth + 1, &mut sl);
+            *spare = rest + sl;
+            self.build(children + 1, vr, right, nr, depth + 1, spare);
+        }
     }
 
     /// An empty list with room for `n` events, from the pool when it has one.
@@ -223,25 +331,25 @@ impl Builder<'_> {
     }
 
     fn leaf(&mut self, node: usize, v: &Aabb, ev0: &[u64], depth: u32) {
-        let first = self.items.len();
-        self.items
-            .extend(ev0.iter().filter(|&&e| kind(e) != END).map(|&e| tri(e)));
-        let count = self.items.len() - first;
+        let out = &mut *self.out;
+        let first = out.items.len();
+        out.items.extend(
+            ev0.iter()
+                .filter(|&&e| kind(e) != END)
+                .map(|&e| self.ids[tri(e) as usize]),
+        );
+        let count = out.items.len() - first;
         assert!(first <= MAX_INDEX, "kd-tree leaf lists too large");
-        self.nodes[node] = Node::leaf(first, count);
+        out.nodes[node] = Node::leaf(first, count);
         let cost =
-            v.area() as f64 / self.root_area * (self.p.intersection_cost as f64 * count as f64);
-        KdTree::count_leaf(&mut self.stats, count, depth as usize, cost);
+            v.area() as f64 / self.c.root_area * (self.p.intersection_cost as f64 * count as f64);
+        KdTree::count_leaf(&mut out.stats, count, depth as usize, cost);
     }
 
-    /// The part of triangle `t` in voxel `v` (perfect split), or its box cut by `v`.
+    /// The part of triangle `t` (a local id) in voxel `v` (perfect split), or its box cut by
+    /// `v`.
     fn child_box(&self, t: u32, v: &Aabb) -> Option<Aabb> {
-        if self.p.perfect_splits {
-            clipped_bounds(&self.tris[t as usize], v)
-        } else {
-            let b = self.boxes[t as usize].intersection(*v);
-            (!b.is_empty()).then_some(b)
-        }
+        child_box(&self.c, self.ids[t as usize], &self.boxes[t as usize], v)
     }
 
     /// The SAH-best plane: one sweep over each axis's sorted events.
@@ -346,6 +454,24 @@ impl Builder<'_> {
     }
 }
 
+/// The left child's share of `spare` references, of children holding `nl` and `nr`: in
+/// proportion to its references.
+pub(crate) fn share(spare: usize, nl: usize, nr: usize) -> usize {
+    (spare as u128 * nl as u128 / (nl + nr).max(1) as u128) as usize
+}
+
+/// The part of triangle `tri` (into `c.tris`) in voxel `v` (perfect split), or `b` (its box,
+/// or its part in a voxel holding `v`) cut by `v`; `None` when nothing of it is in `v`.
+#[inline]
+pub(crate) fn child_box(c: &Ctx, tri: u32, b: &Aabb, v: &Aabb) -> Option<Aabb> {
+    if c.p.perfect_splits {
+        clipped_bounds(&c.tris[tri as usize], v)
+    } else {
+        let b = b.intersection(*v);
+        (!b.is_empty()).then_some(b)
+    }
+}
+
 /// Sorts `new` and merges it into the sorted `list`, through `out` (an empty list that
 /// swaps places with `list`: the old list comes back in `out`).
 fn merge_into(list: &mut Vec<u64>, new: &mut [u64], out: &mut Vec<u64>) {
@@ -418,7 +544,18 @@ mod tests {
                 [0; 3].map(|_| c + Vec3::new(rnd(), rnd(), rnd()) - 0.5)
             })
             .collect();
-        for p in [SahParams::fast(), SahParams::default(), SahParams::slow()] {
+        let binned = |p: SahParams| SahParams {
+            sweep_below: 16,
+            bins: 8,
+            ..p.with_build(BuildPreset::Fast)
+        };
+        for p in [
+            SahParams::fast(),
+            SahParams::default(),
+            SahParams::slow(),
+            binned(SahParams::fast()),
+            binned(SahParams::default()),
+        ] {
             let t = build_sah(&tris, &p);
             assert!(
                 t.stats.leaves > 10 && t.stats.empty_leaves > 0,

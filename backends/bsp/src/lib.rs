@@ -3,7 +3,9 @@
 //!
 //! - Object level: a surface-area-heuristic kd-tree per mesh, built in O(N log N) with sorted
 //!   split events and perfect splits (Wald & Havran 2006; Havran's thesis), [`build_sah`],
-//!   with parameters and presets in [`SahParams`].
+//!   with parameters and presets in [`SahParams`]; or, with [`BuildPreset::Fast`], binned SAH
+//!   above a node size and that sweep below, subtrees built in parallel ([`build_binned`]).
+//!   Both make leaves rather than pass a reference budget ([`SahParams::max_refs_per_tri`]).
 //! - Top level: a binned-SAH kd-tree over the instances' world boxes, [`build_top`], rebuilt
 //!   by [`coherent_accel::Accel::set_instances`] without touching the mesh trees.
 //! - 8-byte [`Node`]s with both children adjacent; triangles as projection-test records
@@ -16,6 +18,7 @@
 //!   on leaves priced per four triangles ([`SahParams::leaf_group`]).
 
 mod bsp;
+mod build_binned;
 mod build_sah;
 mod build_top;
 mod clip;
@@ -31,11 +34,15 @@ mod walk;
 mod walk1;
 
 pub use bsp::{Bsp, MeshTree};
+pub use build_binned::{PARALLEL_MIN, build_binned};
 pub use build_sah::build_sah;
 pub use build_top::build_top;
 pub use clip::clipped_bounds;
 pub use counters::TraversalStats;
 pub use leaf4::{Leaves4, Tri4};
 pub use node::{MAX_CHILD, MAX_INDEX, Node};
-pub use params::{BspParams, MAX_TREE_DEPTH, SahParams, TopParams, default_single_ray_threshold};
+pub use params::{
+    BspParams, BuildPreset, MAX_BINS, MAX_TREE_DEPTH, SahParams, TopParams,
+    default_single_ray_threshold,
+};
 pub use tree::{KdTree, TreeStats};

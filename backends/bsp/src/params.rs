@@ -22,6 +22,71 @@ pub struct SahParams {
     /// Leaves are priced per group of this many triangles (K_I times the groups): 1 prices
     /// each triangle, 4 suits leaves tested four at a time ([`BspParams::simd_leaves`]).
     pub leaf_group: u32,
+    /// Which algorithm searches the splits: the exact sweep or binning above a node size.
+    pub build: BuildPreset,
+    /// [`BuildPreset::Fast`]: bins per axis (the candidate planes are the `bins - 1` bin
+    /// boundaries), 2 to [`MAX_BINS`].
+    pub bins: u32,
+    /// [`BuildPreset::Fast`]: nodes of at most this many references are handed to the exact
+    /// sweep (with perfect splits when [`Self::perfect_splits`] is set).
+    pub sweep_below: u32,
+    /// Reference budget, both builders: a tree over N triangles holds at most
+    /// `ceil(max_refs_per_tri * N)` leaf references, for any input, e.g. thousands of long
+    /// thin triangles through one point, whose clipped parts otherwise multiply at every split
+    /// near the point. The build counts references (in finished leaves and in nodes still to
+    /// build, so the bound holds throughout the build too); a node whose split could pass the
+    /// budget becomes a leaf. Below a node of [`crate::PARALLEL_MIN`] references or more, each
+    /// subtree may spend only a share of what is left, in proportion to its references, so
+    /// that running out on one side does not make the other side all leaves (the exact build
+    /// passes what the left one leaves on to the right one; the fast build, which may build
+    /// both at once, takes back what both leave: its tree does not depend on the thread
+    /// count). 16 binds on none of the built-in scenes (3 references per triangle or fewer):
+    /// their exact trees are the same as without a budget.
+    pub max_refs_per_tri: f32,
+}
+
+/// The largest [`SahParams::bins`].
+pub const MAX_BINS: u32 = 64;
+
+/// How the object trees search their split planes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum BuildPreset {
+    /// The O(N log N) sweep over sorted events at every node (Wald & Havran 2006): every
+    /// candidate plane, every node.
+    #[default]
+    Exact,
+    /// Binned SAH at nodes above [`SahParams::sweep_below`] references (Hunt et al. 2006;
+    /// Shevtsov, Soupikov & Kapustin 2007), the exact sweep below; subtrees of large nodes
+    /// built in parallel. The same tree on any number of threads.
+    Fast,
+}
+
+impl BuildPreset {
+    pub const ALL: [BuildPreset; 2] = [BuildPreset::Exact, BuildPreset::Fast];
+
+    /// The name on the command line (`--bsp-build`).
+    pub fn name(self) -> &'static str {
+        match self {
+            BuildPreset::Exact => "exact",
+            BuildPreset::Fast => "fast",
+        }
+    }
+}
+
+impl std::fmt::Display for BuildPreset {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for BuildPreset {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::ALL
+            .into_iter()
+            .find(|b| b.name() == s)
+            .ok_or_else(|| format!("unknown BSP build `{s}`; builds: exact, fast"))
+    }
 }
 
 /// The deepest any tree may be (the traversal stacks hold this many entries).
@@ -34,7 +99,8 @@ impl Default for SahParams {
 }
 
 impl SahParams {
-    /// Quick to build: no clipping, leaves of up to 8 triangles.
+    /// Coarse leaves: no clipping, leaves of up to 8 triangles. (It sets the leaves, not the
+    /// split search: that is [`Self::build`], e.g. [`Self::with_build`].)
     pub fn fast() -> Self {
         Self {
             leaf_size: 8,
@@ -69,7 +135,16 @@ impl SahParams {
             leaf_size: 4,
             perfect_splits: true,
             leaf_group: 1,
+            build: BuildPreset::Exact,
+            bins: 32,
+            sweep_below: 1024,
+            max_refs_per_tri: 16.0,
         }
+    }
+
+    /// These parameters with the split search `build`.
+    pub fn with_build(self, build: BuildPreset) -> Self {
+        Self { build, ..self }
     }
 
     /// The finest tree: splits searched down to single triangles, up to 60 levels deep. Slower
@@ -102,6 +177,14 @@ impl SahParams {
             self.max_depth
         };
         d.min(MAX_TREE_DEPTH)
+    }
+
+    /// The most leaf references a tree over `n` triangles may hold ([`Self::max_refs_per_tri`]),
+    /// never fewer than `n` (a single leaf).
+    pub fn ref_budget(&self, n: usize) -> usize {
+        let b = (self.max_refs_per_tri.max(1.0) as f64 * n as f64).ceil();
+        // Also for NaN: `as` saturates, and NaN becomes 0.
+        (b.min(usize::MAX as f64) as usize).max(n)
     }
 }
 
