@@ -9,6 +9,7 @@ use coherent_accel::{
 };
 use coherent_simd::Lanes;
 use glam::{Affine3A, Vec3};
+use rayon::prelude::*;
 
 use crate::counters::{Counters, TraversalStats};
 use crate::leaf4::Leaves4;
@@ -257,9 +258,10 @@ impl Accel for Bsp {
         for (i, m) in scene.meshes.iter().enumerate() {
             m.validate(i)?;
         }
+        // One tree per mesh, in parallel: each is built alone, so they are the same trees.
         let meshes: Vec<MeshTree> = scene
             .meshes
-            .iter()
+            .par_iter()
             .map(|m| {
                 let t = MeshTree::build(&m.positions, &m.indices, &params.object);
                 if params.simd_leaves {
