@@ -7,7 +7,7 @@ use std::sync::OnceLock;
 
 use coherent_accel::testing::*;
 use coherent_accel::{Accel, BruteForce, Mesh, Ray1, Rays, Scene};
-use coherent_bsp::{Bsp, BspParams, SahParams};
+use coherent_bsp::{Bsp, BspParams, BuildPreset, SahParams};
 use coherent_simd::{Backend, Kernel, Lanes, SimdMask};
 use glam::Vec3;
 use proptest::prelude::*;
@@ -34,7 +34,76 @@ fn param_sets(lanes: usize) -> Vec<BspParams> {
     };
     p.object.leaf_group = 4;
     v.push(p);
+    // The fast build: binning down to 16 references (the test scenes are far below the
+    // default hand-over to the exact sweep), with and without perfect splits, and with a
+    // reference budget tight enough to stop splits.
+    for (object, sweep_below, bins, refs) in [
+        (SahParams::default(), 16, 8, 16.0),
+        (SahParams::fast(), 0, 32, 16.0),
+        (SahParams::slow(), 4, 5, 1.2),
+    ] {
+        let p = BspParams {
+            object: SahParams {
+                build: BuildPreset::Fast,
+                sweep_below,
+                bins,
+                max_refs_per_tri: refs,
+                ..object
+            },
+            ..BspParams::default()
+        };
+        v.push(p);
+    }
     v
+}
+
+/// How many sets [`param_sets`] gives.
+const PARAM_SETS: usize = 7;
+
+/// Triangles a kd-tree build finds hard, shuffled together: long thin ones (spanning the
+/// scene one way, a thousandth of it across), degenerate ones (points, lines), coplanar sets
+/// in axis planes, duplicates, and a fan of thin ones through one point (returned too).
+fn hard_scene(seed: u64, n: usize) -> (Scene, Vec3) {
+    let mut rng = Rng::new(seed);
+    let mut tris: Vec<[Vec3; 3]> = vec![];
+    let pt = |rng: &mut Rng| rng.vec3(Vec3::splat(-5.0), Vec3::splat(5.0));
+    let hub = pt(&mut rng);
+    while tris.len() < n {
+        let a = pt(&mut rng);
+        let t = match rng.next_u64() % 6 {
+            0 => {
+                let d = rng.unit_vector() * rng.range(4.0, 10.0);
+                [a, a + d, a + d + rng.unit_vector() * 0.01]
+            }
+            1 => {
+                // A point or a segment.
+                let b = if rng.next_u64().is_multiple_of(2) {
+                    a
+                } else {
+                    pt(&mut rng)
+                };
+                [a, b, a + (b - a) * 0.25]
+            }
+            2 => {
+                let k = (rng.next_u64() % 3) as usize;
+                let mut t = [a, pt(&mut rng), pt(&mut rng)];
+                // Few distinct plane positions: many coplanar triangles per plane.
+                let v = (rng.next_u64() % 3) as f32 - 1.0;
+                for p in &mut t {
+                    p[k] = v;
+                }
+                t
+            }
+            3 if !tris.is_empty() => tris[rng.next_u64() as usize % tris.len()],
+            4 => {
+                let d = rng.unit_vector() * 6.0;
+                [hub, hub + d, hub + d + rng.unit_vector() * 0.02]
+            }
+            _ => [a, a + rng.unit_vector(), a + rng.unit_vector()],
+        };
+        tris.push(t);
+    }
+    (Scene::single(Mesh::from_triangles("hard", &tris)), hub)
 }
 
 /// The edge cases, run for one lane backend.
@@ -154,6 +223,17 @@ pub fn edge_cases<L: Lanes>(l: L) {
     rays.push(Ray1::infinite(Vec3::new(-1.0, 0.0, 0.5), Vec3::X)); // in the plane y = 0
     rays.push(Ray1::infinite(Vec3::new(0.5, 0.5, -1.0), Vec3::Z));
     check(&scene, &rays);
+
+    // Long thin, degenerate, coplanar, duplicated triangles and a fan, with rays through
+    // the fan's hub.
+    let (scene, hub) = hard_scene(8, 1500);
+    let mut rays = random_rays(9, &scene, 160);
+    let mut rng = Rng::new(10);
+    for _ in 0..40 {
+        let o = rng.vec3(Vec3::splat(-9.0), Vec3::splat(9.0));
+        rays.push(Ray1::infinite(o, hub - o));
+    }
+    check(&scene, &rays);
 }
 
 /// Random scenes that once failed (seed, triangles, meshes, instances): a vertex on the mesh
@@ -267,12 +347,18 @@ struct RandomScene {
     meshes: usize,
     instances: usize,
     preset: usize,
+    /// [`hard_scene`] instead of a random soup.
+    hard: bool,
 }
 impl Kernel for RandomScene {
     type Output = Result<(), String>;
     #[inline(always)]
     fn run<L: Lanes>(self, l: L) -> Result<(), String> {
-        let scene = random_scene(self.seed, self.tris, self.meshes, self.instances);
+        let scene = if self.hard {
+            hard_scene(self.seed, self.tris).0
+        } else {
+            random_scene(self.seed, self.tris, self.meshes, self.instances)
+        };
         let rays = random_rays(self.seed, &scene, 96);
         let p = param_sets(L::N).swap_remove(self.preset);
         let (bf, bsp) = build_both::<Bsp>(&scene, &p);
@@ -377,9 +463,21 @@ macro_rules! bsp_tests {
                     tris in 1usize..400,
                     meshes in 1usize..4,
                     instances in 0usize..7,
-                    preset in 0usize..4,
+                    preset in 0usize..PARAM_SETS,
                 ) {
-                    let k = RandomScene { seed, tris, meshes, instances, preset };
+                    let k = RandomScene { seed, tris, meshes, instances, preset, hard: false };
+                    if let Some(r) = on(B, k) {
+                        r.map_err(TestCaseError::fail)?;
+                    }
+                }
+
+                #[test]
+                fn hard_scenes_match_brute_force(
+                    seed in any::<u64>(),
+                    tris in 1usize..600,
+                    preset in 0usize..PARAM_SETS,
+                ) {
+                    let k = RandomScene { seed, tris, meshes: 1, instances: 0, preset, hard: true };
                     if let Some(r) = on(B, k) {
                         r.map_err(TestCaseError::fail)?;
                     }
@@ -396,6 +494,11 @@ bsp_tests!(wide8, Backend::Wide8);
 bsp_tests!(wide16, Backend::Wide16);
 bsp_tests!(avx2, Backend::Avx2);
 bsp_tests!(avx512, Backend::Avx512);
+
+#[test]
+fn param_sets_are_counted() {
+    assert_eq!(param_sets(4).len(), PARAM_SETS);
+}
 
 #[test]
 fn object_presets_differ() {

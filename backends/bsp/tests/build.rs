@@ -1,0 +1,116 @@
+//! The object-tree builds of the two-level BSP (paper section 3) as trees: the fast build
+//! (binned SAH, Hunt et al. 2006 / Shevtsov et al. 2007) is the same tree on 1 and 2 threads,
+//! and both builds keep a fan of long thin triangles through one point (Wald & Havran 2006's
+//! perfect splits multiply its references) within the reference budget.
+
+use coherent_accel::shapes::{Rng, soup, terrain};
+use coherent_bsp::{BuildPreset, KdTree, MeshTree, PARALLEL_MIN, SahParams};
+use glam::Vec3;
+
+fn fast() -> SahParams {
+    SahParams::default().with_build(BuildPreset::Fast)
+}
+
+fn build_on(threads: usize, positions: &[Vec3], indices: &[[u32; 3]], p: &SahParams) -> KdTree {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(|| MeshTree::build(positions, indices, p).tree)
+}
+
+fn assert_same(a: &KdTree, b: &KdTree, what: &str) {
+    assert_eq!(a.nodes, b.nodes, "{what}: nodes differ");
+    assert_eq!(a.items, b.items, "{what}: items differ");
+    assert_eq!(a.bounds, b.bounds, "{what}");
+    let (mut sa, mut sb) = (a.stats.clone(), b.stats.clone());
+    (sa.build_seconds, sb.build_seconds) = (0.0, 0.0);
+    assert_eq!(sa, sb, "{what}");
+}
+
+#[test]
+fn fast_tree_is_the_same_on_one_and_two_threads() {
+    let meshes = [
+        soup("soup", 40_000, 20.0, 0.8, 3),
+        terrain("terrain", 100.0, 96, 12.0, 5),
+    ];
+    for m in &meshes {
+        assert!(
+            m.indices.len() > 2 * PARALLEL_MIN,
+            "too small to build in parallel"
+        );
+        for p in [
+            fast(),
+            SahParams {
+                sweep_below: 64,
+                bins: 16,
+                ..fast()
+            },
+            SahParams {
+                max_refs_per_tri: 1.1,
+                ..fast()
+            },
+        ] {
+            let one = build_on(1, &m.positions, &m.indices, &p);
+            let two = build_on(2, &m.positions, &m.indices, &p);
+            assert!(one.stats.nodes > 1000, "{:?}", one.stats);
+            assert_same(&one, &two, &m.name);
+            assert_eq!(one.stats.leaf_refs, one.items.len());
+        }
+    }
+}
+
+/// The exact build's tree does not depend on the thread pool either (mesh trees are built in
+/// parallel, each by itself).
+#[test]
+fn exact_tree_is_the_same_on_one_and_two_threads() {
+    let m = soup("soup", 5_000, 20.0, 0.8, 4);
+    let p = SahParams::default();
+    assert_same(
+        &build_on(1, &m.positions, &m.indices, &p),
+        &build_on(2, &m.positions, &m.indices, &p),
+        "exact",
+    );
+}
+
+/// `n` long thin triangles through the origin, in every direction: every plane near the
+/// origin cuts nearly all of them, so each split there clips (and copies) nearly all.
+fn fan(n: usize) -> Vec<[Vec3; 3]> {
+    let mut rng = Rng::new(4);
+    (0..n)
+        .map(|_| {
+            let d = rng.unit_vector() * 100.0;
+            [Vec3::ZERO, d, d + rng.unit_vector() * 0.05]
+        })
+        .collect()
+}
+
+/// A fan of 20,000 thin triangles through one point builds, with either preset, within its
+/// reference budget (`max_refs_per_tri` references per triangle: at most 16 x 20,000 leaf
+/// references, 1.3 MB of items) and in seconds, leaves taking the place of further splits.
+#[test]
+fn fan_through_one_point_stays_within_the_reference_budget() {
+    let tris = fan(20_000);
+    for build in BuildPreset::ALL {
+        for refs in [16.0, 2.0] {
+            let p = SahParams {
+                max_refs_per_tri: refs,
+                ..SahParams::default().with_build(build)
+            };
+            let t0 = std::time::Instant::now();
+            let t = coherent_bsp::build_sah(&tris, &p);
+            let secs = t0.elapsed().as_secs_f64();
+            let budget = p.ref_budget(tris.len());
+            assert_eq!(budget, (refs * 20_000.0) as usize);
+            assert_eq!(t.items.len(), t.stats.leaf_refs);
+            assert!(
+                t.stats.leaf_refs <= budget,
+                "{build:?} {refs}: {} references, budget {budget}",
+                t.stats.leaf_refs
+            );
+            // Generous for unoptimized test builds on a loaded machine.
+            assert!(secs < 60.0, "{build:?} {refs}: {secs} s");
+            eprintln!("fan {build:?} refs {refs}: {:?} in {secs:.2} s", t.stats);
+        }
+    }
+}
