@@ -10,7 +10,8 @@
 //! ONLY=single|BACKEND: time just that (on primary rays, or KIND=shadow|diffuse), and print
 //! traversal counters.
 //! KT, KI, BONUS, LEAF, DEPTH, PRESET, GROUP (leaves priced per group) / TOPBINS, TOPKI,
-//! TOPLEAF: override build parameters. SIMD_LEAVES=1: single rays test leaves 4 at a time.
+//! TOPLEAF: override build parameters; BUILD=exact|fast picks the object trees' split search.
+//! SIMD_LEAVES=1: single rays test leaves 4 at a time.
 //! MIXED=0: packets walk per group of equal direction signs (the paper's way).
 //! ```
 
@@ -33,6 +34,9 @@ fn params(thr: Option<u32>) -> BspParams {
         p.object = SahParams::preset(&name).expect("PRESET: fast default slow");
     }
     let o = &mut p.object;
+    if let Some(b) = env::<String>("BUILD") {
+        o.build = b.parse().unwrap();
+    }
     o.traversal_cost = env("KT").unwrap_or(o.traversal_cost);
     o.intersection_cost = env("KI").unwrap_or(o.intersection_cost);
     o.empty_bonus = env("BONUS").unwrap_or(o.empty_bonus);
