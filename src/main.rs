@@ -91,6 +91,11 @@ struct RenderArgs {
     /// Accelerator: bsp, embree, obvhs, brute.
     #[arg(long, default_value = "bsp")]
     accel: String,
+    /// How the BSP builds its object trees: `exact` (the O(N log N) sweep over every plane at
+    /// every node) or `fast` (binned SAH above 256 references, the sweep below; subtrees in
+    /// parallel). Other accelerators ignore it.
+    #[arg(long, default_value = "exact", value_parser = parse_bsp_build())]
+    bsp_build: coherent::bsp::BuildPreset,
     /// Worker threads (default: every core).
     #[arg(long)]
     threads: Option<usize>,
@@ -138,6 +143,16 @@ struct RenderArgs {
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
+}
+
+/// `--bsp-build`: clap lists the names and refuses others.
+fn parse_bsp_build() -> impl clap::builder::TypedValueParser<Value = coherent::bsp::BuildPreset> {
+    use clap::builder::TypedValueParser;
+    let names = coherent::bsp::BuildPreset::ALL.map(|b| b.name());
+    clap::builder::PossibleValuesParser::new(names).map(|s| {
+        s.parse::<coherent::bsp::BuildPreset>()
+            .expect("a listed name")
+    })
 }
 
 fn parse_resolution(s: &str) -> Result<(u32, u32), String> {

@@ -95,7 +95,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     opts.validate()?;
 
     let t_build = Instant::now();
-    let accel = AnyAccel::build(&scene.accel_scene(), &AnyParams::of(kind))
+    let mut params = AnyParams::of(kind);
+    params.bsp.object.build = args.bsp_build;
+    let accel = AnyAccel::build(&scene.accel_scene(), &params)
         .with_context(|| format!("building the {kind} accelerator for {}", scene.name))?;
     let build = t_build.elapsed();
     let memory = accel.memory_bytes();
