@@ -291,6 +291,28 @@ impl Accel for AnyAccel {
     ) {
         dispatch!(self, a => a.intersect_all(l, rays, active, f))
     }
+
+    #[inline(always)]
+    fn intersect_beam<L: Lanes>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        hits: &mut [Hits<L>],
+    ) {
+        dispatch!(self, a => a.intersect_beam(l, rays, active, hits))
+    }
+
+    #[inline(always)]
+    fn occluded_beam<L: Lanes>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        occluded: &mut [L::Mask],
+    ) {
+        dispatch!(self, a => a.occluded_beam(l, rays, active, occluded))
+    }
 }
 
 #[cfg(test)]

@@ -93,6 +93,45 @@ pub trait Accel: Send + Sync + Sized {
         )
     }
 
+    /// A beam: many packets of coherent rays traced together (camera rays of a tile, shadow
+    /// rays of a tile toward one point), first hits. `hits[j]` receives packet `j`'s answer,
+    /// exactly what [`Accel::intersect`] gives for `rays[j]` under `active[j]`; the three
+    /// slices have one entry per packet.
+    ///
+    /// The default traces packet after packet. Structures that can do less work for a
+    /// coherent group than for its packets one by one (the BSP's beam traversal: an entry
+    /// point shared by the group, interval bounds deciding a node for every ray at once)
+    /// override it.
+    #[inline(always)]
+    fn intersect_beam<L: Lanes>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        hits: &mut [Hits<L>],
+    ) {
+        debug_assert!(rays.len() == active.len() && rays.len() == hits.len());
+        for ((r, &m), h) in rays.iter().zip(active).zip(hits.iter_mut()) {
+            *h = self.intersect(l, r, m);
+        }
+    }
+
+    /// A beam's occlusion (see [`Accel::intersect_beam`]): `occluded[j]` receives
+    /// [`Accel::occluded`] of packet `j`.
+    #[inline(always)]
+    fn occluded_beam<L: Lanes>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        occluded: &mut [L::Mask],
+    ) {
+        debug_assert!(rays.len() == active.len() && rays.len() == occluded.len());
+        for ((r, &m), o) in rays.iter().zip(active).zip(occluded.iter_mut()) {
+            *o = self.occluded(l, r, m);
+        }
+    }
+
     /// Every hit of every active lane, passed to `f(lane, hit)` with the guarantees of
     /// [`Accel::intersect_all1`] per lane; lanes may interleave.
     #[inline(always)]

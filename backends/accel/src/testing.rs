@@ -273,6 +273,111 @@ pub fn check_all_queries<L: Lanes, A: Accel>(
     Ok(())
 }
 
+/// The beam queries of `accel` ([`Accel::intersect_beam`], [`Accel::occluded_beam`]) against
+/// brute force: `rays` packed into packets of `L` in order (the last one padded by repeating
+/// its rays), all traced as one beam, under random masks of active lanes.
+pub fn check_beam_queries<L: Lanes, A: Accel>(
+    l: L,
+    bf: &BruteForce,
+    accel: &A,
+    rays: &[Ray1],
+    mask_seed: u64,
+) -> Result<(), String> {
+    let mut rng = Rng::new(mask_seed);
+    let packets: Vec<Rays<L>> = rays
+        .chunks(L::N)
+        .map(|c| Rays::from_fn(l, |i| c[i % c.len()]))
+        .collect();
+    let active: Vec<L::Mask> = rays
+        .chunks(L::N)
+        .map(|c| {
+            let bits = if rng.next_u64() % 4 != 0 {
+                u32::MAX
+            } else {
+                rng.next_u64() as u32
+            };
+            l.mask_from_fn(|i| i < c.len() && bits >> i & 1 == 1)
+        })
+        .collect();
+    let mut hits = vec![crate::Hits::miss(l); packets.len()];
+    let mut occ = vec![l.splat_mask(false); packets.len()];
+    accel.intersect_beam(l, &packets, &active, &mut hits);
+    accel.occluded_beam(l, &packets, &active, &mut occ);
+    for (j, p) in packets.iter().enumerate() {
+        for i in 0..L::N {
+            let r = p.lane(i);
+            if active[j].lane(i) {
+                check_first(bf, &r, hits[j].lane(i))
+                    .map_err(|e| format!("beam packet {j} lane {i}: {e}"))?;
+                check_occluded(bf, &r, occ[j].lane(i))
+                    .map_err(|e| format!("beam packet {j} lane {i}: {e}"))?;
+            } else if hits[j].lane(i).is_some() || occ[j].lane(i) {
+                return Err(format!("beam packet {j}: inactive lane {i} reported a hit"));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// How the rays of a coherent test beam ([`beam_rays`]) are related.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BeamKind {
+    /// One origin, directions through a `side` x `side` grid on a small screen (camera
+    /// rays of a tile).
+    Camera,
+    /// One end point: rays from points on the scene's triangles to a common point, ending
+    /// just before it (shadow rays toward a point light).
+    Shadow,
+}
+
+/// A coherent beam of `side * side` rays at `scene`, in tile order (row by row), for the
+/// beam tests: `kind` says how they are related. The origin (or end point) is random around
+/// the scene; the tile is aimed at a random triangle point so that it sees geometry.
+pub fn beam_rays(seed: u64, scene: &Scene, side: usize, kind: BeamKind) -> Vec<Ray1> {
+    let mut rng = Rng::new(seed ^ 0xbea7);
+    let target = |rng: &mut Rng| -> Vec3 {
+        if scene.instances.is_empty() {
+            return rng.vec3(Vec3::splat(-5.0), Vec3::splat(5.0));
+        }
+        let inst = &scene.instances[rng.next_u64() as usize % scene.instances.len()];
+        let mesh = &scene.meshes[inst.mesh];
+        let [a, b, c] = mesh.triangle(rng.next_u64() as usize % mesh.indices.len());
+        let (u, v) = (rng.f32() * 0.5, rng.f32() * 0.5);
+        inst.world_from_object
+            .transform_point3(a + (b - a) * u + (c - a) * v)
+    };
+    let eye = rng.vec3(Vec3::splat(-15.0), Vec3::splat(15.0));
+    let look = target(&mut rng);
+    let fwd = (look - eye).normalize_or(Vec3::Z);
+    let up = if fwd.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+    let right = fwd.cross(up).normalize();
+    let up = right.cross(fwd);
+    // A tile of about a degree to a whole view.
+    let bf = BruteForce::build(scene, &()).ok();
+    let width = [0.02, 0.2, 1.0][rng.next_u64() as usize % 3];
+    let n = side.max(1);
+    (0..n * n)
+        .map(|k| {
+            let (x, y) = ((k % n) as f32, (k / n) as f32);
+            let s = (x + 0.5) / n as f32 - 0.5;
+            let t = (y + 0.5) / n as f32 - 0.5;
+            let d = fwd + right * (s * width) + up * (t * width);
+            match kind {
+                BeamKind::Camera => Ray1::infinite(eye, d),
+                BeamKind::Shadow => {
+                    // From the point of the scene this camera ray meets (or a point along it).
+                    let hit = bf.as_ref().and_then(|bf| bf.intersect1(&Ray1::infinite(eye, d)));
+                    let o = match hit {
+                        Some(h) => eye + d * h.t,
+                        None => eye + d * rng.range(1.0, 20.0),
+                    };
+                    Ray1::new(o, eye - o, 1e-4, 1.0 - 1e-4)
+                }
+            }
+        })
+        .collect()
+}
+
 /// Builds brute force and `A` with `params` (panics on bad scenes: test helper).
 pub fn build_both<A: Accel>(scene: &Scene, params: &A::Params) -> (BruteForce, A) {
     (

@@ -279,6 +279,73 @@ impl<A: Accel> Kernel for TimePackets<'_, A> {
     }
 }
 
+/// Times one pass of `rays` as beams of `beam` rays (consecutive rays; the packets of the
+/// backend's width they pack into, traced together by [`Accel::intersect_beam`] or
+/// [`Accel::occluded_beam`]): best of `repeats` passes. `beam` is rounded up to whole
+/// packets. Packing happens before the clock starts.
+pub struct TimeBeams<'a, A: Accel> {
+    pub accel: &'a A,
+    pub rays: &'a [Ray1],
+    pub beam: usize,
+    pub occlusion: bool,
+    pub repeats: usize,
+    pub clock: Clock,
+}
+
+impl<A: Accel> Kernel for TimeBeams<'_, A> {
+    type Output = PassResult;
+
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) -> PassResult {
+        let (packets, masks): (Vec<Rays<L>>, Vec<L::Mask>) = self
+            .rays
+            .chunks(L::N)
+            .map(|c| {
+                let p = Rays::from_fn(l, |i| c[i.min(c.len() - 1)]);
+                (p, l.mask_from_fn(|i| i < c.len()))
+            })
+            .unzip();
+        let per_beam = self.beam.div_ceil(L::N).max(1);
+        let mut hits_buf = vec![crate::Hits::miss(l); per_beam];
+        let mut occ_buf = vec![l.splat_mask(false); per_beam];
+        let mut best = PassResult {
+            seconds: f64::INFINITY,
+            ..Default::default()
+        };
+        for _ in 0..self.repeats.max(1) {
+            let t0 = self.clock.now();
+            let mut hits = 0u64;
+            let zero = l.splat(0.0);
+            let mut t_acc = zero;
+            for (p, m) in packets.chunks(per_beam).zip(masks.chunks(per_beam)) {
+                if self.occlusion {
+                    let o = &mut occ_buf[..p.len()];
+                    self.accel.occluded_beam(l, p, m, o);
+                    hits += o.iter().map(|o| o.count() as u64).sum::<u64>();
+                } else {
+                    let hs = &mut hits_buf[..p.len()];
+                    self.accel.intersect_beam(l, p, m, hs);
+                    for (h, &m) in hs.iter().zip(m) {
+                        let hm = h.hit_mask(l) & m;
+                        hits += hm.count() as u64;
+                        t_acc += hm.select(h.t, zero);
+                    }
+                }
+            }
+            let s = self.clock.now() - t0;
+            let t_sum = (0..L::N).map(|i| t_acc.lane(i) as f64).sum();
+            if s < best.seconds {
+                best = PassResult {
+                    seconds: s,
+                    hits,
+                    t_sum,
+                };
+            }
+        }
+        best
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
