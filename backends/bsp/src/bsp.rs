@@ -137,6 +137,82 @@ impl Bsp {
         self.any(l, rays, active, c)
     }
 
+    /// [`Accel::intersect_beam`], counting what the traversal did into `c`.
+    #[inline(always)]
+    pub fn intersect_beam_counted<L: Lanes>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        hits: &mut [Hits<L>],
+        c: &mut TraversalStats,
+    ) {
+        self.first_beam(l, rays, active, hits, c);
+    }
+
+    /// [`Accel::occluded_beam`], counting what the traversal did into `c`.
+    #[inline(always)]
+    pub fn occluded_beam_counted<L: Lanes>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        occluded: &mut [L::Mask],
+        c: &mut TraversalStats,
+    ) {
+        self.any_beam(l, rays, active, occluded, c);
+    }
+
+    #[inline(always)]
+    fn first_beam<L: Lanes, C: Counters>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        hits: &mut [Hits<L>],
+        c: &mut C,
+    ) {
+        assert!(rays.len() == active.len() && rays.len() == hits.len());
+        let mut qs: Vec<FirstP<L>> = rays
+            .iter()
+            .map(|r| FirstP {
+                best: r.tmax,
+                hits: Hits::miss(l),
+            })
+            .collect();
+        crate::beam::scene_beam(l, self, rays, active, &mut qs, c);
+        for (h, q) in hits.iter_mut().zip(qs) {
+            *h = q.hits;
+        }
+    }
+
+    #[inline(always)]
+    fn any_beam<L: Lanes, C: Counters>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        occluded: &mut [L::Mask],
+        c: &mut C,
+    ) {
+        assert!(rays.len() == active.len() && rays.len() == occluded.len());
+        let neg_inf = l.splat(f32::NEG_INFINITY);
+        let mut qs: Vec<AnyP<L>> = rays
+            .iter()
+            .zip(active)
+            .map(|(r, &a)| AnyP {
+                tmax: r.tmax,
+                occluded: l.splat_mask(false),
+                active: a & r.valid(l),
+                neg_inf,
+            })
+            .collect();
+        crate::beam::scene_beam(l, self, rays, active, &mut qs, c);
+        for ((o, q), &a) in occluded.iter_mut().zip(qs).zip(active) {
+            *o = q.occluded & a;
+        }
+    }
+
     #[inline(always)]
     fn any1<C: Counters>(&self, ray: &Ray1, c: &mut C) -> bool {
         if !ray.is_valid() {
@@ -338,6 +414,28 @@ impl Accel for Bsp {
     #[inline(always)]
     fn occluded<L: Lanes>(&self, l: L, rays: &Rays<L>, active: L::Mask) -> L::Mask {
         self.any(l, rays, active, &mut ())
+    }
+
+    #[inline(always)]
+    fn intersect_beam<L: Lanes>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        hits: &mut [Hits<L>],
+    ) {
+        self.first_beam(l, rays, active, hits, &mut ());
+    }
+
+    #[inline(always)]
+    fn occluded_beam<L: Lanes>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        occluded: &mut [L::Mask],
+    ) {
+        self.any_beam(l, rays, active, occluded, &mut ());
     }
 
     #[inline(always)]

@@ -19,6 +19,16 @@ pub trait Counters {
     /// A subtree handed from packet to single-ray traversal, for `lanes` lanes.
     #[inline(always)]
     fn handoff(&mut self, _lanes: u32) {}
+    /// An inner node decided for a whole beam (or sub-beam) by its interval bounds.
+    #[inline(always)]
+    fn beam_step(&mut self) {}
+    /// A beam (or sub-beam) handed to its `packets` lane packets at its entry point.
+    #[inline(always)]
+    fn beam_entry(&mut self, _packets: u32) {}
+    /// Lanes of a beam traced as ordinary packets instead (direction signs against the
+    /// beam's, a zero direction component).
+    #[inline(always)]
+    fn beam_fallback(&mut self, _lanes: u32) {}
 }
 
 impl Counters for () {}
@@ -37,6 +47,13 @@ pub struct TraversalStats {
     pub instance_lanes: u64,
     pub handoffs: u64,
     pub handoff_lanes: u64,
+    /// Inner nodes decided for a whole beam or sub-beam.
+    pub beam_steps: u64,
+    /// Sub-beams handed to their packets at an entry point, and the packets handed.
+    pub beam_entries: u64,
+    pub beam_entry_packets: u64,
+    /// Beam lanes traced as ordinary packets (signs against the beam's, zero components).
+    pub beam_fallback_lanes: u64,
 }
 
 impl TraversalStats {
@@ -88,5 +105,18 @@ impl Counters for TraversalStats {
     fn handoff(&mut self, lanes: u32) {
         self.handoffs += 1;
         self.handoff_lanes += lanes as u64;
+    }
+    #[inline(always)]
+    fn beam_step(&mut self) {
+        self.beam_steps += 1;
+    }
+    #[inline(always)]
+    fn beam_entry(&mut self, packets: u32) {
+        self.beam_entries += 1;
+        self.beam_entry_packets += packets as u64;
+    }
+    #[inline(always)]
+    fn beam_fallback(&mut self, lanes: u32) {
+        self.beam_fallback_lanes += lanes as u64;
     }
 }

@@ -17,6 +17,7 @@
 //!   may test a leaf's triangles four at a time ([`BspParams::simd_leaves`], [`Leaves4`]),
 //!   on leaves priced per four triangles ([`SahParams::leaf_group`]).
 
+mod beam;
 mod bsp;
 mod build_binned;
 mod build_sah;

@@ -309,7 +309,8 @@ pub(crate) fn walk<L: Lanes, S, C: Counters>(
     }
 }
 
-/// Walks one mesh with an object-space packet group (lanes `m`, segments `[tn, tf]`).
+/// Walks one mesh from node `start` with an object-space packet group (lanes `m`, segments
+/// `[tn, tf]` inside the node's voxel).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn mesh_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
@@ -317,6 +318,7 @@ pub(crate) fn mesh_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
     mesh: &MeshTree,
     inst: u32,
     r: &RaysX<L>,
+    start: usize,
     tn: L::F32s,
     tf: L::F32s,
     m: L::Mask,
@@ -331,7 +333,7 @@ pub(crate) fn mesh_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
         l,
         &mesh.tree,
         r,
-        0,
+        start,
         tn,
         tf,
         m,
@@ -393,7 +395,7 @@ pub(crate) fn mesh_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
 /// a transform may change signs).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn enter_instance<L: Lanes, Q: QueryP<L>, C: Counters>(
+pub(crate) fn enter_instance<L: Lanes, Q: QueryP<L>, C: Counters>(
     l: L,
     bsp: &Bsp,
     i: u32,
@@ -411,7 +413,7 @@ fn enter_instance<L: Lanes, Q: QueryP<L>, C: Counters>(
         let mm = m & t0.le(t1);
         if mm.any() {
             c.instance(mm.count());
-            mesh_packet(l, mesh, i, wr, t0, t1, mm, thr, bsp.params.mailbox, q, c);
+            mesh_packet(l, mesh, i, wr, 0, t0, t1, mm, thr, bsp.params.mailbox, q, c);
         }
         return;
     }
@@ -430,7 +432,7 @@ fn enter_instance<L: Lanes, Q: QueryP<L>, C: Counters>(
         bsp.params.mixed_signs,
         #[inline(always)]
         |g, r| {
-            mesh_packet(l, mesh, i, r, t0, t1, g, thr, bsp.params.mailbox, q, c);
+            mesh_packet(l, mesh, i, r, 0, t0, t1, g, thr, bsp.params.mailbox, q, c);
         },
     );
 }

@@ -1,0 +1,187 @@
+//! Beams against lane packets on a built-in scene: primary and shadow rays of a 1024 x 768
+//! image (or WxH), traced as lane packets of each backend and as square beams of 4x4 to 32x32
+//! rays on the same backend; Mrays/s (median of interleaved passes, thread CPU time) and the
+//! traversal counters per ray. The `accel` experiment of `reproduce` measures the same beside
+//! Embree and obvhs; this is the quick look at the BSP alone.
+//!
+//! ```text
+//! cargo run --release -p coherent-bsp --example beam -- [SCENE] [quick|full] [WxH] [BACKENDS]
+//! SCENE: spheres terrain room blob (default room); BACKENDS: comma-separated (default: the
+//! widest and scalar)
+//! ```
+
+use coherent_accel::scenes::{self, BuiltinScene, SceneSize};
+use coherent_accel::workload::{self, Clock, RayKind, TimeBeams, TimePackets};
+use coherent_accel::{Accel, Hits, Ray1, Rays};
+use coherent_bsp::{Bsp, BspParams, TraversalStats};
+use coherent_simd::{Backend, Kernel, Lanes};
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let name = args.get(1).map_or("room", String::as_str);
+    let size = if args.get(2).is_some_and(|s| s == "quick") {
+        SceneSize::Quick
+    } else {
+        SceneSize::Full
+    };
+    let (w, h) = args
+        .get(3)
+        .and_then(|s| s.split_once('x'))
+        .map_or((1024, 768), |(a, b)| {
+            (a.parse().unwrap(), b.parse().unwrap())
+        });
+    let backends: Vec<Backend> = match args.get(4) {
+        Some(list) => list.split(',').map(|b| b.parse().unwrap()).collect(),
+        None => {
+            let mut v = vec![Backend::widest()];
+            if v[0] != Backend::Scalar {
+                v.push(Backend::Scalar);
+            }
+            v
+        }
+    };
+    let s = scenes::by_name(name, size).expect("scene: spheres terrain room blob");
+    let bsp = Bsp::build(&s.scene, &BspParams::default()).unwrap();
+    println!(
+        "{}: {} triangles, {} instances, {w}x{h}",
+        s.name,
+        bsp.stats().triangles,
+        bsp.stats().instances
+    );
+    for kind in [RayKind::Primary, RayKind::Shadow] {
+        for &b in &backends {
+            run(&s, &bsp, kind, b, w, h);
+        }
+    }
+}
+
+fn rays(s: &BuiltinScene, bsp: &Bsp, kind: RayKind, w: u32, h: u32, tile: (u32, u32)) -> Vec<Ray1> {
+    let primary = workload::primary_rays(&s.view, w, h, tile);
+    match kind {
+        RayKind::Shadow => workload::shadow_rays(bsp, &s.scene, &primary, s.light),
+        _ => primary,
+    }
+}
+
+/// Lane packets, then beams of each size, on backend `b`: Mrays/s and counters per ray.
+fn run(s: &BuiltinScene, bsp: &Bsp, kind: RayKind, b: Backend, w: u32, h: u32) {
+    let occlusion = kind.occlusion();
+    // (label, beam rays or 0 for lane packets, rays in that order)
+    let mut sets = vec![(
+        "lanes".to_owned(),
+        0,
+        rays(s, bsp, kind, w, h, workload::tile_shape(b.lanes().max(16))),
+    )];
+    for side in [4u32, 8, 16, 32] {
+        if w.is_multiple_of(side) && h.is_multiple_of(side) {
+            let n = (side * side) as usize;
+            sets.push((format!("beam {n}"), n, rays(s, bsp, kind, w, h, (side, side))));
+        }
+    }
+    let passes = 7;
+    let mut secs = vec![Vec::new(); sets.len()];
+    for _ in 0..passes {
+        for (i, (_, n, r)) in sets.iter().enumerate() {
+            let res = if *n == 0 {
+                b.run(TimePackets {
+                    accel: bsp,
+                    rays: r,
+                    occlusion,
+                    repeats: 1,
+                    clock: Clock::ThreadCpu,
+                })
+            } else {
+                b.run(TimeBeams {
+                    accel: bsp,
+                    rays: r,
+                    beam: *n,
+                    occlusion,
+                    repeats: 1,
+                    clock: Clock::ThreadCpu,
+                })
+            }
+            .unwrap();
+            secs[i].push(res.seconds);
+        }
+    }
+    let lanes_rate = rate(&sets[0].2, &mut secs[0]);
+    for (i, (label, n, r)) in sets.iter().enumerate() {
+        let mr = rate(r, &mut secs[i]);
+        let c = b
+            .run(Counted {
+                bsp,
+                rays: r,
+                beam: *n,
+                occlusion,
+            })
+            .unwrap();
+        let k = r.len() as f64;
+        println!(
+            "{:>8} {:>7} {:>9}: {:7.2} Mrays/s ({:.2}x lanes)  per ray: {:.2} inner + {:.2} beam steps, {:.2} leaves, {:.3} tests x {:.2} lanes; fallback {} lanes",
+            kind.name(),
+            b.name(),
+            label,
+            mr,
+            mr / lanes_rate,
+            c.inner_nodes as f64 / k,
+            c.beam_steps as f64 / k,
+            c.leaves as f64 / k,
+            c.tri_tests as f64 / k,
+            c.lanes_per_test(),
+            c.beam_fallback_lanes,
+        );
+    }
+}
+
+/// Mrays/s from the median of `secs`.
+fn rate(rays: &[Ray1], secs: &mut [f64]) -> f64 {
+    secs.sort_by(f64::total_cmp);
+    rays.len() as f64 / secs[secs.len() / 2] / 1e6
+}
+
+/// Traversal counters of lane packets (`beam` 0) or beams of `beam` rays.
+struct Counted<'a> {
+    bsp: &'a Bsp,
+    rays: &'a [Ray1],
+    beam: usize,
+    occlusion: bool,
+}
+
+impl Kernel for Counted<'_> {
+    type Output = TraversalStats;
+    fn run<L: Lanes>(self, l: L) -> TraversalStats {
+        let mut c = TraversalStats::default();
+        let per = if self.beam == 0 {
+            1
+        } else {
+            self.beam.div_ceil(L::N)
+        };
+        for group in self.rays.chunks(per * L::N) {
+            let (p, m): (Vec<Rays<L>>, Vec<_>) = group
+                .chunks(L::N)
+                .map(|ch| {
+                    (
+                        Rays::from_fn(l, |i| ch[i.min(ch.len() - 1)]),
+                        l.mask_from_fn(|i| i < ch.len()),
+                    )
+                })
+                .unzip();
+            if self.beam == 0 {
+                for (p, &m) in p.iter().zip(&m) {
+                    if self.occlusion {
+                        self.bsp.occluded_counted(l, p, m, &mut c);
+                    } else {
+                        self.bsp.intersect_counted(l, p, m, &mut c);
+                    }
+                }
+            } else if self.occlusion {
+                let mut o = vec![l.splat_mask(false); p.len()];
+                self.bsp.occluded_beam_counted(l, &p, &m, &mut o, &mut c);
+            } else {
+                let mut hs = vec![Hits::miss(l); p.len()];
+                self.bsp.intersect_beam_counted(l, &p, &m, &mut hs, &mut c);
+            }
+        }
+        c
+    }
+}
