@@ -34,11 +34,18 @@
 //! accelerator that cannot run here (Embree without its library) and a mesh that is not
 //! fetched are noted and left out. What Embree runs (version, ISA, native packet widths) goes
 //! into `machine.json` (key `embree`; every run writes which build measured under `build`).
+//!
+//! Beams (`query` column `beam`; the packet rows say `lanes`): the BSP's beam traversal
+//! ([`Accel::intersect_beam`]) on primary and shadow rays, with `width` the beam's ray count:
+//! square screen tiles of 4x4 to 32x32 rays on the widest backend (the beam-size sweep), and
+//! 8x8 and 16x16 on the scalar backend (one-lane packets under a shared beam: the culling
+//! without SIMD). The rays are the same as every other row's, ordered tile by tile; the
+//! beam rows are timed interleaved with the others and cross-checked like them.
 
 use std::collections::BTreeMap;
 
 use coherent::accel::scenes::{self, BuiltinScene, SceneSize};
-use coherent::accel::workload::{self, Clock, PassResult, RayKind, TimePackets};
+use coherent::accel::workload::{self, Clock, PassResult, RayKind, TimeBeams, TimePackets};
 use coherent::accel::{Accel, Ray1, Rays};
 use coherent::accel_any::{AccelKind, AnyAccel};
 use coherent::bsp::{Bsp, BspParams, TraversalStats};
@@ -89,6 +96,8 @@ const HEADER: &[&str] = &[
     "memory_bytes",
     "hits",
     "t_sum",
+    "query",
+    "backend",
 ];
 const LEAVES_HEADER: &[&str] = &[
     "scene",
@@ -138,6 +147,8 @@ const TRAVERSAL_HEADER: &[&str] = &[
     "mailbox_hit_rate",
     "obvhs_tests_per_ray",
     "obvhs_nodes_per_ray",
+    "query",
+    "backend",
 ];
 
 /// Width 1 (single rays, `None`) and each packet width with its backend.
@@ -152,10 +163,44 @@ fn widths(ctx: &mut Ctx) -> Vec<(usize, Option<Backend>)> {
     v
 }
 
+/// The beams timed: (rays per beam, backend). Square tiles from 4x4 to 32x32 on the widest
+/// backend; 8x8 and 16x16 on the scalar one.
+fn beams() -> Vec<(usize, Backend)> {
+    let widest = Backend::widest();
+    let mut v: Vec<(usize, Backend)> = [16, 64, 256, 1024].map(|n| (n, widest)).to_vec();
+    if widest != Backend::Scalar {
+        v.extend([(64, Backend::Scalar), (256, Backend::Scalar)]);
+    }
+    v
+}
+
+/// The side of a square beam of `n` rays.
+fn beam_side(n: usize) -> u32 {
+    (n as f64).sqrt().round() as u32
+}
+
 /// The rays of one kind, ordered in screen tiles for packets of `width` lanes. Every width
 /// gets the same rays (diffuse rays are seeded per pixel), in its own order.
 fn rays(s: &BuiltinScene, bsp: &Bsp, kind: RayKind, w: u32, h: u32, width: usize) -> Vec<Ray1> {
-    let tile = workload::tile_shape(if width == 1 { 16 } else { width });
+    rays_in_tiles(
+        s,
+        bsp,
+        kind,
+        w,
+        h,
+        workload::tile_shape(if width == 1 { 16 } else { width }),
+    )
+}
+
+/// The rays of one kind, ordered tile by tile (`tile`: width and height in pixels).
+fn rays_in_tiles(
+    s: &BuiltinScene,
+    bsp: &Bsp,
+    kind: RayKind,
+    w: u32,
+    h: u32,
+    tile: (u32, u32),
+) -> Vec<Ray1> {
     let primary = workload::primary_rays(&s.view, w, h, tile);
     match kind {
         RayKind::Primary => primary,
@@ -187,6 +232,23 @@ fn pass_any<A: Accel>(
             clock: CLOCK,
         })?,
     })
+}
+
+/// One pass of the BSP's beam traversal over `rays` in beams of `n` rays on `backend`.
+fn pass_beam(
+    bsp: &Bsp,
+    rays: &[Ray1],
+    occlusion: bool,
+    (n, backend): (usize, Backend),
+) -> anyhow::Result<PassResult> {
+    Ok(backend.run(TimeBeams {
+        accel: bsp,
+        rays,
+        beam: n,
+        occlusion,
+        repeats: 1,
+        clock: CLOCK,
+    })?)
 }
 
 /// Medians of interleaved samples of each configuration (`f(i)` runs configuration `i`
@@ -383,6 +445,10 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     let (w, h) = ctx.pick((256, 192), (1024, 768));
     let samples = ctx.pick(3, 7);
     let widths = widths(ctx);
+    let beams: Vec<(usize, Backend)> = beams()
+        .into_iter()
+        .filter(|&(n, _)| w.is_multiple_of(beam_side(n)) && h.is_multiple_of(beam_side(n)))
+        .collect();
     let all = scene_list(ctx, size);
     record_embree(ctx);
     let bar = ctx.progress(all.len() as u64 * 3, "accel");
@@ -404,6 +470,18 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
                 .iter()
                 .map(|&(wd, _)| rays(s, &bsp, kind, w, h, wd))
                 .collect();
+            // Beams for coherent rays only: their rays in square tiles of the beam's size.
+            let beam_sets: Vec<Vec<Ray1>> = if kind == RayKind::Diffuse {
+                Vec::new()
+            } else {
+                beams
+                    .iter()
+                    .map(|&(n, _)| {
+                        let side = beam_side(n);
+                        rays_in_tiles(s, &bsp, kind, w, h, (side, side))
+                    })
+                    .collect()
+            };
             for (o, _) in &mut others {
                 prepare(o, kind);
             }
@@ -424,6 +502,7 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
             // Embree's plain C-API loop and its `Accel` trait path per packet width.
             let mut variants: Vec<(Who, usize)> =
                 (0..widths.len()).map(|i| (Who::Bsp, i)).collect();
+            variants.extend((0..beam_sets.len()).map(|b| (Who::Beam, b)));
             for (k, (o, _)) in others.iter().enumerate() {
                 for (i, &(wd, _)) in widths.iter().enumerate() {
                     if wd == 1 || has_packets(o) {
@@ -447,6 +526,7 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
                 let occ = kind.occlusion();
                 match who {
                     Who::Bsp => pass_any(&bsp, &sets[i], occ, widths[i].1),
+                    Who::Beam => pass_beam(&bsp, &beam_sets[i], occ, beams[i]),
                     #[cfg(feature = "embree")]
                     Who::Other(k) => match (&others[k].0, &mut packed[i]) {
                         // Embree's packet rows: its own packets, packed before timing.
@@ -471,29 +551,38 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
             let reference = res[0].1;
             for (v, &(who, i)) in variants.iter().enumerate() {
                 let (name, build_ms, memory) = match who {
-                    Who::Bsp => ("bsp", build_ms, memory),
+                    Who::Bsp | Who::Beam => ("bsp", build_ms, memory),
                     Who::Other(k) => (others[k].0.name(), others[k].1, others[k].0.memory_bytes()),
                     #[cfg(feature = "embree")]
                     Who::EmbreePlain(_) | Who::EmbreeTrait(_) => continue,
+                };
+                let (n, width, query, backend) = match who {
+                    Who::Beam => (beam_sets[i].len(), beams[i].0, "beam", Some(beams[i].1)),
+                    _ => (sets[i].len(), widths[i].0, "lanes", widths[i].1),
                 };
                 let (secs, r) = res[v];
                 csv.row(&[
                     &s.name,
                     &name,
                     &kind.name(),
-                    &widths[i].0,
-                    &format!("{:.3}", sets[i].len() as f64 / secs / 1e6),
+                    &width,
+                    &format!("{:.3}", n as f64 / secs / 1e6),
                     &format!("{build_ms:.2}"),
                     &memory,
                     &r.hits,
                     &format!("{:.6e}", r.t_sum),
+                    &query,
+                    &backend.map_or("single", Backend::name),
                 ])?;
-                if let Some(why) = disagreement(&reference, &r, sets[i].len()) {
+                if let Some(why) = disagreement(&reference, &r, n) {
+                    let on = match who {
+                        Who::Beam => format!("beams of {width} on {}", beams[i].1.name()),
+                        _ => format!("width {width}"),
+                    };
                     disagreements.push(format!(
-                        "{} {} rays, {name} at width {}: {why}",
+                        "{} {} rays, {name} at {on}: {why}",
                         s.name,
                         kind.name(),
-                        widths[i].0
                     ));
                 }
             }
@@ -581,6 +670,32 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
                     &format!("{:.4}", c.mailbox_hit_rate()),
                     &bvh_tests,
                     &bvh_nodes,
+                    &"lanes",
+                    &b.map_or("single", Backend::name),
+                ])?;
+            }
+            // The beams' counters: inner nodes count the beam's own steps with its packets'.
+            for (b, &(n_beam, backend)) in beams.iter().enumerate().take(beam_sets.len()) {
+                let c = backend.run(CountedBeam {
+                    bsp: &bsp,
+                    rays: &beam_sets[b],
+                    beam: n_beam,
+                    occlusion: kind.occlusion(),
+                })?;
+                let n = beam_sets[b].len() as f64;
+                trav.row(&[
+                    &s.name,
+                    &kind.name(),
+                    &n_beam,
+                    &format!("{:.3}", (c.inner_nodes + c.beam_steps) as f64 / n),
+                    &format!("{:.3}", c.leaves as f64 / n),
+                    &format!("{:.3}", c.tri_tests as f64 / n),
+                    &format!("{:.3}", c.lanes_per_test()),
+                    &format!("{:.4}", c.mailbox_hit_rate()),
+                    &"-",
+                    &"-",
+                    &"beam",
+                    &backend.name(),
                 ])?;
             }
             let mut ls = LeafSet {
@@ -803,6 +918,8 @@ impl LeafSet<'_> {
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Who {
     Bsp,
+    /// The BSP's beams: `beams()[i]`.
+    Beam,
     /// `others[k]`.
     Other(usize),
     /// Embree (`others[k]`): the plain C-API loop over its packed packets.
@@ -904,11 +1021,133 @@ impl Kernel for Counted<'_> {
     }
 }
 
+/// Traversal counters over beams of `beam` rays in packets of the backend's width.
+struct CountedBeam<'a> {
+    bsp: &'a Bsp,
+    rays: &'a [Ray1],
+    beam: usize,
+    occlusion: bool,
+}
+
+impl Kernel for CountedBeam<'_> {
+    type Output = TraversalStats;
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) -> TraversalStats {
+        let mut c = TraversalStats::default();
+        let per_beam = self.beam.div_ceil(L::N).max(1);
+        for group in self.rays.chunks(per_beam * L::N) {
+            let (p, m): (Vec<Rays<L>>, Vec<_>) = group
+                .chunks(L::N)
+                .map(|ch| {
+                    (
+                        Rays::from_fn(l, |i| ch[i.min(ch.len() - 1)]),
+                        l.mask_from_fn(|i| i < ch.len()),
+                    )
+                })
+                .unzip();
+            if self.occlusion {
+                let mut o = vec![l.splat_mask(false); p.len()];
+                self.bsp.occluded_beam_counted(l, &p, &m, &mut o, &mut c);
+            } else {
+                let mut h = vec![coherent::accel::Hits::miss(l); p.len()];
+                self.bsp.intersect_beam_counted(l, &p, &m, &mut h, &mut c);
+            }
+        }
+        c
+    }
+}
+
+/// Whether row `r` of an `accel.csv` is a beam row (files written before beams have no
+/// `query` column: all lane packets).
+fn is_beam(t: &crate::Table, r: usize) -> bool {
+    t.get(r, "query").is_ok_and(|q| q == "beam")
+}
+
+/// The beam rows of `accel.csv` as a table: per scene and ray kind, the BSP's lane packets
+/// at the widest width, its beams per size and backend, and Embree's fastest row, Mrays/s.
+fn beam_report(t: &crate::Table) -> anyhow::Result<Option<String>> {
+    let mut sizes: Vec<(usize, String)> = Vec::new();
+    let mut keys: Vec<(String, String)> = Vec::new();
+    for r in 0..t.rows.len() {
+        if is_beam(t, r) {
+            let k = (t.f64(r, "width")? as usize, t.get(r, "backend")?.to_owned());
+            if !sizes.contains(&k) {
+                sizes.push(k);
+            }
+            let key = (t.get(r, "scene")?.to_owned(), t.get(r, "rays")?.to_owned());
+            if !keys.contains(&key) {
+                keys.push(key);
+            }
+        }
+    }
+    if sizes.is_empty() {
+        return Ok(None);
+    }
+    sizes.sort_by(|a, b| (a.1 == "scalar", a.0).cmp(&(b.1 == "scalar", b.0)));
+    let mut header = vec![
+        "scene".to_owned(),
+        "rays".to_owned(),
+        "lane packets (widest)".to_owned(),
+        "Embree's fastest".to_owned(),
+    ];
+    header.extend(sizes.iter().map(|(n, b)| format!("beam {n} ({b})")));
+    header.push("best beam / packets".to_owned());
+    header.push("best beam / Embree".to_owned());
+    let mut rows = Vec::new();
+    for (scene, rays) in &keys {
+        let of = |pred: &dyn Fn(usize) -> anyhow::Result<bool>| -> anyhow::Result<Option<f64>> {
+            let mut best: Option<f64> = None;
+            for r in 0..t.rows.len() {
+                if t.get(r, "scene")? == scene && t.get(r, "rays")? == rays && pred(r)? {
+                    let v = t.f64(r, "mrays_per_s")?;
+                    best = Some(best.map_or(v, |b: f64| b.max(v)));
+                }
+            }
+            Ok(best)
+        };
+        let lanes = of(&|r| Ok(t.get(r, "accel")? == "bsp" && !is_beam(t, r)))?;
+        let embree = of(&|r| Ok(t.get(r, "accel")? == "embree"))?;
+        let mut row = vec![scene.clone(), rays.clone()];
+        row.push(lanes.map_or("-".into(), fmt_num));
+        row.push(embree.map_or("-".into(), fmt_num));
+        let mut best_beam: Option<f64> = None;
+        for (n, b) in &sizes {
+            let v = of(&|r| {
+                Ok(is_beam(t, r)
+                    && t.f64(r, "width")? as usize == *n
+                    && t.get(r, "backend")? == b)
+            })?;
+            if b != "scalar" {
+                best_beam = match (best_beam, v) {
+                    (Some(x), Some(y)) => Some(x.max(y)),
+                    (x, y) => x.or(y),
+                };
+            }
+            row.push(v.map_or("-".into(), fmt_num));
+        }
+        let ratio = |a: Option<f64>, b: Option<f64>| match (a, b) {
+            (Some(a), Some(b)) if b > 0.0 => format!("{:.2}", a / b),
+            _ => "-".into(),
+        };
+        row.push(ratio(best_beam, lanes));
+        row.push(ratio(best_beam, embree));
+        rows.push(row);
+    }
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
+    Ok(Some(format!(
+        "\nBeams (`query` = beam in `accel.csv`): Mrays/s of the BSP's beam traversal on \
+         square tiles of `width` rays (the beam-size sweep on the widest backend; the scalar \
+         backend's beams cull without SIMD), beside its fastest lane packets and Embree's \
+         fastest row (any width). The same rays, one thread.\n\n{}",
+        markdown_table(&header, &rows)
+    )))
+}
+
 /// The BSP's `(scene, rays)` -> width -> Mrays/s, from `accel.csv`.
 fn rates(t: &crate::Table) -> anyhow::Result<BTreeMap<(String, String), BTreeMap<u32, f64>>> {
     let mut m: BTreeMap<(String, String), BTreeMap<u32, f64>> = BTreeMap::new();
     for r in 0..t.rows.len() {
-        if t.get(r, "accel")? != "bsp" {
+        if t.get(r, "accel")? != "bsp" || is_beam(t, r) {
             continue;
         }
         m.entry((t.get(r, "scene")?.to_owned(), t.get(r, "rays")?.to_owned()))
@@ -1039,6 +1278,9 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     if let Some(cmp) = compare_report(ctx)? {
         md.push_str(&cmp);
     }
+    if let Some(b) = beam_report(&t)? {
+        md.push_str(&b);
+    }
     if let Some(th) = ctx.read_csv("accel_threshold.csv", THRESHOLD_HEADER)? {
         md.push_str(
             "\nThe packet-to-single-ray switch (`accel_threshold.csv`): Mrays/s when a packet \
@@ -1140,6 +1382,9 @@ fn read_rows_of(ctx: &Ctx, file: &str) -> anyhow::Result<Option<(Rows, Vec<Strin
     let mut rows = Rows::new();
     let mut scenes: Vec<String> = Vec::new();
     for r in 0..t.rows.len() {
+        if is_beam(&t, r) {
+            continue;
+        }
         let scene = t.get(r, "scene")?.to_string();
         if !scenes.contains(&scene) {
             scenes.push(scene.clone());
@@ -1475,10 +1720,12 @@ fn native_report(ctx: &Ctx, rows: &Rows) -> anyhow::Result<Option<String>> {
 /// `accel_traversal.csv`), with the header they had; the report then shows what those files
 /// hold.
 fn read_either(ctx: &Ctx, file: &str, header: &[&str]) -> anyhow::Result<Option<crate::Table>> {
+    // Older files lack the trailing `query` and `backend` columns (and older still the
+    // cross-check's).
     let older: &[usize] = if file.ends_with("traversal.csv") {
-        &[1, 2]
+        &[2, 3, 4]
     } else {
-        &[2]
+        &[2, 4]
     };
     match ctx.read_csv(file, header) {
         Ok(t) => Ok(t),
