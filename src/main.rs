@@ -127,6 +127,11 @@ struct RenderArgs {
     /// are compacted into full packets (the same image up to rounding; fewer, fuller packets).
     #[arg(long)]
     regroup: bool,
+    /// Camera rays: `lanes` (packet by packet, the paper's way) or `beam` (a film tile's
+    /// packets together through the accelerator's beam query: the BSP walks them as one
+    /// beam; the others answer packet by packet). The same image up to edge hits.
+    #[arg(long, default_value = "lanes")]
+    packets: coherent::render::Packets,
     /// Time each stage of the packet pipeline (traversal, shadows, lights, shading, other)
     /// and print the split. The clock is read around every stage of every packet, which
     /// slows the frame; the split is for comparing stages, not for frame times.

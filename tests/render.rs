@@ -558,6 +558,44 @@ fn regrouped_secondary_packets_give_each_sample_its_radiance() {
 }
 
 #[test]
+fn camera_beams_give_the_lane_packets_image() {
+    // A tile's camera packets traced together as one beam find the same hits as packet by
+    // packet: the same rays of every kind, the same image up to which of two triangles at a
+    // shared edge a ray hits (the dropped pixels).
+    use coherent::render::Packets;
+    for sc in &lit_scenes() {
+        for backend in Backend::usable() {
+            let accel = AnyAccel::build(&sc.accel_scene(), &AnyParams::of(AccelKind::Bsp)).unwrap();
+            let mut r = Renderer::new(sc, accel, W, H).unwrap();
+            let (plain, plain_stats) = render_centres(&r, backend, W, H).unwrap();
+            r.packets = Packets::Beam;
+            let (img, stats) = render_centres(&r, backend, W, H).unwrap();
+            let what = format!("{}, {}", sc.name, backend.name());
+            for k in RayKind::ALL {
+                let (a, b) = (stats.rays(k), plain_stats.rays(k));
+                // A ray grazing an edge may hit or miss: a few secondary rays may differ.
+                assert!(
+                    a.abs_diff(b) <= b / 1000 + 2,
+                    "{what}: {} rays {a} against {b}",
+                    k.name()
+                );
+            }
+            let peak = plain
+                .iter()
+                .flat_map(|c| c.iter().copied())
+                .fold(0.0f32, f32::max)
+                .max(1e-3);
+            let (db, dropped) = psnr_but_edge_pixels(&img, &plain, peak);
+            assert!(
+                db >= 40.0,
+                "{what}: PSNR {db:.1} dB camera beams against lane packets (without its \
+                 {dropped} most different pixel(s))"
+            );
+        }
+    }
+}
+
+#[test]
 fn the_thread_count_does_not_change_the_image() {
     use coherent::film::{FilmOptions, Method};
     use coherent::render::render_frame;

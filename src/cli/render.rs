@@ -10,7 +10,7 @@ use coherent::accel::Accel;
 use coherent::accel_any::{AccelKind, AnyAccel, AnyParams};
 use coherent::film::{FilmOptions, Method, PassReport};
 use coherent::median::median;
-use coherent::render::{RayKind, Renderer, render_frame};
+use coherent::render::{Packets, RayKind, Renderer, render_frame};
 use coherent::simd::Backend;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -104,6 +104,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let mut renderer = Renderer::new(&scene, accel, w, h).context("the scene's camera")?;
     renderer.light_samples = args.light_samples;
     renderer.regroup = args.regroup;
+    renderer.packets = args.packets;
     renderer.time_stages = args.stages;
 
     let threads = args.threads.unwrap_or_else(|| {
@@ -182,7 +183,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         scene.triangles(),
         backend.name(),
         kind,
-        if args.regroup { ", regrouped" } else { "" },
+        match (args.regroup, args.packets) {
+            (false, Packets::Lanes) => "",
+            (true, Packets::Lanes) => ", regrouped",
+            (false, Packets::Beam) => ", camera beams",
+            (true, Packets::Beam) => ", camera beams, regrouped",
+        },
         threads,
         stop_text(&rendered),
         seconds.as_secs_f64(),

@@ -20,11 +20,11 @@
 //! inlined into each backend's kernel, and a second call site would be a second copy of it
 //! per backend (build time and code size).
 
-use coherent_accel::{Accel, Rays};
+use coherent_accel::{Accel, Hits, Rays};
 use coherent_simd::{Lanes, MAX_LANES, Rgbs, SimdF32, SimdI32, SimdMask, Vec3s};
 
 use super::stats::StageClock;
-use super::{Differentials, RenderStats, Renderer, Segment, Stage};
+use super::{Differentials, Packets, RenderStats, Renderer, Segment, Stage};
 use crate::film::{PacketIn, PacketOut};
 
 /// The `f32` values a lane of a segment carries: origin, direction, `tmin`, `tmax`, the four
@@ -63,6 +63,23 @@ impl<A: Accel> Renderer<'_, A> {
         let mut generation: Vec<Segment<L>> = Vec::new();
         let mut lanes: Vec<Lane> = Vec::new();
         let mut next_packet = 0;
+        // With beams, the camera packets' hits all at once, before anything else.
+        let mut camera_hits: Vec<Hits<L>> = Vec::new();
+        if self.packets == Packets::Beam && !packets.is_empty() {
+            let mut clock = StageClock::start(self.time_stages);
+            let (rays, active): (Vec<Rays<L>>, Vec<L::Mask>) = packets
+                .iter()
+                .map(|p| {
+                    let cam = self.camera.rays(l, l.load(&p.xs), l.load(&p.ys));
+                    (cam.rays, l.mask_from_bits(p.bits))
+                })
+                .unzip();
+            camera_hits = vec![Hits::miss(l); packets.len()];
+            self.accel.intersect_beam(l, &rays, &active, &mut camera_hits);
+            clock.lap(stats, Stage::Traversal);
+        }
+        // The hits of the camera packet about to be traced, when the beam found them.
+        let mut traced: Option<Hits<L>> = None;
         let mut radiance = Rgbs::zero(l);
         // The camera packet whose tree is being traced depth-first.
         let mut root = (l.splat_mask(false), l.lane_ids());
@@ -80,6 +97,7 @@ impl<A: Accel> Renderer<'_, A> {
                     active,
                 );
                 s.slot = l.lane_ids() + l.splat_i32((next_packet * n) as i32);
+                traced = camera_hits.get(next_packet).copied();
                 root = (active, s.slot);
                 next_packet += 1;
                 clock.lap(stats, Stage::Other);
@@ -92,7 +110,7 @@ impl<A: Accel> Renderer<'_, A> {
             } else {
                 break;
             };
-            self.segment(l, &seg, &mut radiance, &mut children, stats);
+            self.segment(l, &seg, traced.take().as_ref(), &mut radiance, &mut children, stats);
             if self.regroup {
                 file(&mut acc, seg.active, seg.slot, &radiance);
                 radiance = Rgbs::zero(l);

@@ -14,11 +14,12 @@
 mod batch;
 pub mod centres;
 pub mod light_samples;
+pub mod packets;
 pub mod rng;
 pub mod stats;
 pub mod surface;
 
-use coherent_accel::{Accel, Rays};
+use coherent_accel::{Accel, Hits, Rays};
 use coherent_simd::{Lanes, MAX_LANES, Rgbs, SimdF32, SimdI32, SimdMask, Vec3s};
 
 use crate::bdf::Frames;
@@ -29,6 +30,7 @@ use crate::scene::RenderScene;
 use crate::texture::lod_from_differentials;
 
 pub use light_samples::LightSamples;
+pub use packets::Packets;
 use stats::StageClock;
 pub use stats::{LaneCount, RayKind, RenderStats, Stage};
 pub use surface::{Differentials, Geometry, Surface};
@@ -56,6 +58,8 @@ pub struct Renderer<'s, A: Accel> {
     /// fixed chunk of the superpixel corners, the whole image in `centres::render_centres`.
     /// Off by default: the paper's packets keep their lanes.
     pub regroup: bool,
+    /// How a tile's camera rays are traced: packet by packet, or together as one beam.
+    pub packets: Packets,
     /// The image's width in pixels (for [`LightSamples::Tile`]).
     width: u32,
 }
@@ -107,6 +111,7 @@ impl<'s, A: Accel> Renderer<'s, A> {
             time_stages: false,
             light_samples: LightSamples::Pixel,
             regroup: false,
+            packets: Packets::Lanes,
             width,
         })
     }
@@ -185,14 +190,15 @@ impl<'s, A: Accel> Renderer<'s, A> {
         }
     }
 
-    /// Traces one packet: its hits are shaded and lit into `radiance`, its reflection and
-    /// refraction packets go to `pending`. The light samples' random numbers derive from
-    /// `seg.light_ids`.
+    /// Traces one packet: its hits (`traced`, when the beam query found them already) are
+    /// shaded and lit into `radiance`, its reflection and refraction packets go to `pending`.
+    /// The light samples' random numbers derive from `seg.light_ids`.
     #[inline(always)]
     fn segment<L: Lanes>(
         &self,
         l: L,
         seg: &Segment<L>,
+        traced: Option<&Hits<L>>,
         radiance: &mut Rgbs<L>,
         pending: &mut Vec<Segment<L>>,
         stats: &mut RenderStats,
@@ -206,7 +212,10 @@ impl<'s, A: Accel> Renderer<'s, A> {
         stats.count(seg.kind, n_active);
         stats.count_depth(seg.depth as usize, n_active);
         let dir = seg.rays.dir;
-        let hits = self.accel.intersect(l, &seg.rays, seg.active);
+        let hits = match traced {
+            Some(h) => *h,
+            None => self.accel.intersect(l, &seg.rays, seg.active),
+        };
         clock.lap(stats, Stage::Traversal);
         let hit = hits.hit_mask(l) & seg.active;
         let miss = seg.active.and_not(hit);
