@@ -10,10 +10,12 @@ pub mod cli;
 pub mod ctx;
 pub mod experiment;
 pub mod frames;
+pub mod headline;
 pub mod machine_keys;
 pub mod plot;
 pub mod readme;
 pub mod table;
+pub mod targets;
 pub mod timing;
 
 pub use ctx::Ctx;

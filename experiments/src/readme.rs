@@ -1,6 +1,8 @@
-//! `results/README.md`: the machine, a table of contents (paper item -> command -> CSV ->
-//! plot) and one section per experiment, each rendered from the CSV files in the folder
-//! (paper section 7's tables beside ours). Nothing in it is typed by hand.
+//! `results/README.md`: a first screen (the paper's Tables 1-5 against ours in one line each,
+//! three plots, the machine; see [`crate::headline`]), then the machine in full, a table of
+//! contents (paper item -> command -> CSV -> plot) and one section per experiment, each
+//! rendered from the CSV files in the folder (paper section 7's tables beside ours). Nothing
+//! in it is typed by hand.
 
 use crate::ctx::Ctx;
 use crate::experiment::{Experiment, Status};
@@ -23,6 +25,8 @@ pub fn render(ctx: &Ctx, registry: &[Experiment], run: &RunInfo) -> (String, Vec
     let mut problems = Vec::new();
     let mut md = String::new();
     md.push_str("# Results\n\n");
+    md.push_str(&crate::headline::render(ctx, registry));
+    md.push_str("## About these results\n\n");
     md.push_str(
         "Written by `reproduce` (crate `coherent-experiments`): every table below is generated \
          from the CSV files in this folder and every figure from the same data; do not edit by \
@@ -241,7 +245,7 @@ fn contents(ctx: &Ctx, registry: &[Experiment]) -> String {
 }
 
 /// The GitHub anchor of an experiment's section heading `name — description`.
-fn anchor(e: &Experiment) -> String {
+pub(crate) fn anchor(e: &Experiment) -> String {
     let heading = format!("{} — {}", e.name, e.description);
     heading
         .to_lowercase()
@@ -330,6 +334,11 @@ mod tests {
             "{md}"
         );
         assert!(md.contains(&ctx.machine.cpu), "{md}");
+        // The first screen comes first, before the details.
+        let first = md.find("| paper | compared | paper's figures | ours | CSV |");
+        let details = md.find("## About these results");
+        assert!(first.is_some() && first < details, "{md}");
+        assert!(details < md.find("## Machine"), "{md}");
 
         // After: the table comes from the CSV, the plot is linked.
         run(&mut ctx).unwrap();

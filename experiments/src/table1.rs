@@ -49,7 +49,7 @@ pub const EXPERIMENT: Experiment = Experiment {
     },
 };
 
-const HEADER: &[&str] = &["calls", "backend", "lanes", "seconds", "speedup"];
+pub(crate) const HEADER: &[&str] = &["calls", "backend", "lanes", "seconds", "speedup"];
 const COHERENCE_HEADER: &[&str] = &[
     "lanes",
     "packets",
@@ -60,7 +60,7 @@ const COHERENCE_HEADER: &[&str] = &[
 const SPLITS_HEADER: &[&str] = &["backend", "lanes", "packets", "passes", "passes_per_packet"];
 
 /// The paper's Table 1: Intel Centrino, 1.8 GHz mobile Pentium, 512 MB.
-const PAPER: PaperTable = PaperTable {
+pub(crate) const PAPER: PaperTable = PaperTable {
     caption: "Table 1: anisotropic BDF (17 x 7 x 17 x 13) evaluations. Paper: Intel Centrino \
               notebook, 1.8 GHz mobile Pentium, non-SSE vs SSE; ours: the scalar and sse \
               backends on the machine of `machine.json`.",

@@ -23,9 +23,9 @@ pub const EXPERIMENT: Experiment = Experiment {
     },
 };
 
-const FILE: &str = "table4_scenes.csv";
+pub(crate) const FILE: &str = "table4_scenes.csv";
 /// The contract's columns, then the kinds of light (`+`-separated).
-const HEADER: &[&str] = &[
+pub(crate) const HEADER: &[&str] = &[
     "scene",
     "triangles",
     "objects",
@@ -36,7 +36,7 @@ const HEADER: &[&str] = &[
 ];
 
 /// The paper's Table 4.
-const PAPER: PaperTable = PaperTable {
+pub(crate) const PAPER: PaperTable = PaperTable {
     caption: "Table 4: the test scenes. Paper (its scenes) beside ours (generated stand-ins, \
               matched within 10 % in triangles and exactly in lights and depth):",
     key: "scene",

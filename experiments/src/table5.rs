@@ -35,7 +35,7 @@ pub const EXPERIMENT: Experiment = Experiment {
     },
 };
 
-const FILE: &str = "table5_threads.csv";
+pub(crate) const FILE: &str = "table5_threads.csv";
 /// Short frames get more rounds, until the 1-thread frames add up to this many seconds.
 const TIMED_SECONDS: f64 = 2.0;
 /// The fewest rounds.
@@ -52,10 +52,10 @@ fn rounds_for(seconds: f64) -> usize {
 /// `machine.json`, README, CSV files and plots); the `accel` report reads its run there too.
 pub(crate) const MANYCORE: &str = "manycore";
 /// The contract's columns, then the lanes of the backend.
-const HEADER: &[&str] = &["scene", "backend", "threads", "seconds", "speedup", "lanes"];
+pub(crate) const HEADER: &[&str] = &["scene", "backend", "threads", "seconds", "speedup", "lanes"];
 
 /// The paper's Table 5 (its Car scene is called Polo there).
-const PAPER: PaperTable = PaperTable {
+pub(crate) const PAPER: PaperTable = PaperTable {
     caption: "Table 5: a 1024 x 768 frame with SSE on 1 and 2 CPUs. Paper: dual Pentium III \
               933 MHz, its scenes (car = its Polo/Car); ours: the widest backend of this CPU \
               with the BSP, 1 and 2 threads, our stand-ins of its scenes. Seconds are not \
