@@ -442,7 +442,7 @@ fn scene_list(ctx: &mut Ctx, size: SceneSize) -> Vec<BuiltinScene> {
 #[allow(clippy::single_match)] // matches over `AnyAccel`, whose variants come and go with features
 fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     let size = ctx.pick(SceneSize::Quick, SceneSize::Full);
-    let (w, h) = ctx.pick((256, 192), (1024, 768));
+    let (w, h): (u32, u32) = ctx.pick((256, 192), (1024, 768));
     let samples = ctx.pick(3, 7);
     let widths = widths(ctx);
     let beams: Vec<(usize, Backend)> = beams()
