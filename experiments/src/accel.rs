@@ -1113,9 +1113,7 @@ fn beam_report(t: &crate::Table) -> anyhow::Result<Option<String>> {
         let mut best_beam: Option<f64> = None;
         for (n, b) in &sizes {
             let v = of(&|r| {
-                Ok(is_beam(t, r)
-                    && t.f64(r, "width")? as usize == *n
-                    && t.get(r, "backend")? == b)
+                Ok(is_beam(t, r) && t.f64(r, "width")? as usize == *n && t.get(r, "backend")? == b)
             })?;
             if b != "scalar" {
                 best_beam = match (best_beam, v) {

@@ -75,7 +75,8 @@ impl<A: Accel> Renderer<'_, A> {
                 })
                 .unzip();
             camera_hits = vec![Hits::miss(l); packets.len()];
-            self.accel.intersect_beam(l, &rays, &active, &mut camera_hits);
+            self.accel
+                .intersect_beam(l, &rays, &active, &mut camera_hits);
             clock.lap(stats, Stage::Traversal);
         }
         // The hits of the camera packet about to be traced, when the beam found them.
@@ -110,7 +111,14 @@ impl<A: Accel> Renderer<'_, A> {
             } else {
                 break;
             };
-            self.segment(l, &seg, traced.take().as_ref(), &mut radiance, &mut children, stats);
+            self.segment(
+                l,
+                &seg,
+                traced.take().as_ref(),
+                &mut radiance,
+                &mut children,
+                stats,
+            );
             if self.regroup {
                 file(&mut acc, seg.active, seg.slot, &radiance);
                 radiance = Rgbs::zero(l);

@@ -366,7 +366,9 @@ pub fn beam_rays(seed: u64, scene: &Scene, side: usize, kind: BeamKind) -> Vec<R
                 BeamKind::Camera => Ray1::infinite(eye, d),
                 BeamKind::Shadow => {
                     // From the point of the scene this camera ray meets (or a point along it).
-                    let hit = bf.as_ref().and_then(|bf| bf.intersect1(&Ray1::infinite(eye, d)));
+                    let hit = bf
+                        .as_ref()
+                        .and_then(|bf| bf.intersect1(&Ray1::infinite(eye, d)));
                     let o = match hit {
                         Some(h) => eye + d * h.t,
                         None => eye + d * rng.range(1.0, 20.0),

@@ -75,7 +75,11 @@ fn run(s: &BuiltinScene, bsp: &Bsp, kind: RayKind, b: Backend, w: u32, h: u32) {
     for side in [4u32, 8, 16, 32] {
         if w.is_multiple_of(side) && h.is_multiple_of(side) {
             let n = (side * side) as usize;
-            sets.push((format!("beam {n}"), n, rays(s, bsp, kind, w, h, (side, side))));
+            sets.push((
+                format!("beam {n}"),
+                n,
+                rays(s, bsp, kind, w, h, (side, side)),
+            ));
         }
     }
     let passes = 7;

@@ -85,14 +85,28 @@ impl Span {
             return Span::EMPTY;
         }
         let (inf, ninf) = (l.splat(f32::INFINITY), l.splat(f32::NEG_INFINITY));
-        let lo = |x: L::F32s| m.select(x, inf).reduce_min();
-        let hi = |x: L::F32s| m.select(x, ninf).reduce_max();
         Span {
-            o_lo: [lo(r.o[0]), lo(r.o[1]), lo(r.o[2])],
-            o_hi: [hi(r.o[0]), hi(r.o[1]), hi(r.o[2])],
-            inv_lo: [lo(r.inv[0]), lo(r.inv[1]), lo(r.inv[2])],
-            inv_hi: [hi(r.inv[0]), hi(r.inv[1]), hi(r.inv[2])],
-            tmin: lo(r.tmin),
+            o_lo: [
+                lanes_min(m, r.o[0], inf),
+                lanes_min(m, r.o[1], inf),
+                lanes_min(m, r.o[2], inf),
+            ],
+            o_hi: [
+                lanes_max(m, r.o[0], ninf),
+                lanes_max(m, r.o[1], ninf),
+                lanes_max(m, r.o[2], ninf),
+            ],
+            inv_lo: [
+                lanes_min(m, r.inv[0], inf),
+                lanes_min(m, r.inv[1], inf),
+                lanes_min(m, r.inv[2], inf),
+            ],
+            inv_hi: [
+                lanes_max(m, r.inv[0], ninf),
+                lanes_max(m, r.inv[1], ninf),
+                lanes_max(m, r.inv[2], ninf),
+            ],
+            tmin: lanes_min(m, r.tmin, inf),
         }
     }
 
@@ -128,6 +142,19 @@ impl Span {
     }
 }
 
+/// The lowest of lanes `m` of `x` (`inf`: `+inf` in every lane). A function, not a closure
+/// called seven times: it must inline into the backends' target-feature kernels.
+#[inline(always)]
+fn lanes_min<M: SimdMask>(m: M, x: M::F32s, inf: M::F32s) -> f32 {
+    m.select(x, inf).reduce_min()
+}
+
+/// The highest of lanes `m` of `x` (`ninf`: `-inf` in every lane).
+#[inline(always)]
+fn lanes_max<M: SimdMask>(m: M, x: M::F32s, ninf: M::F32s) -> f32 {
+    m.select(x, ninf).reduce_max()
+}
+
 /// Per axis, the bounds of a span's entries into and exits from a voxel's slabs.
 #[derive(Debug, Clone, Copy)]
 struct Slabs {
@@ -140,7 +167,10 @@ impl Slabs {
     /// the walks' slack, so a ray through a corner is inside).
     #[inline(always)]
     fn open(&self, tmin: f32, limit: f32) -> bool {
-        let t0 = self.enter[0].max(self.enter[1]).max(self.enter[2]).max(tmin);
+        let t0 = self.enter[0]
+            .max(self.enter[1])
+            .max(self.enter[2])
+            .max(tmin);
         let t1 = self.exit[0].min(self.exit[1]).min(self.exit[2]).min(limit);
         widen_lo(t0) <= widen_hi(t1)
     }
@@ -215,10 +245,8 @@ impl<L: Lanes> BeamX<L> {
         let inf = l.splat(f32::INFINITY);
         for (r, lanes) in rays {
             // Finite inverse directions only: the bounds' products must not meet 0 * inf.
-            let finite = lanes
-                & r.inv[0].abs().lt(inf)
-                & r.inv[1].abs().lt(inf)
-                & r.inv[2].abs().lt(inf);
+            let finite =
+                lanes & r.inv[0].abs().lt(inf) & r.inv[1].abs().lt(inf) & r.inv[2].abs().lt(inf);
             let fb = finite.bitmask();
             let nb = [r.neg[0].bitmask(), r.neg[1].bitmask(), r.neg[2].bitmask()];
             let mut rest = fb;
@@ -571,7 +599,17 @@ fn enter_beam<L: Lanes, Q: QueryP<L>, C: Counters>(
                 bits &= bits - 1;
                 c.beam_fallback(1);
                 let r = obj.rx[j].lane(k);
-                qs[j].with_lane(l, k, &mut ObjectTask { mesh, r, inst: i, mailbox, c: &mut *c });
+                qs[j].with_lane(
+                    l,
+                    k,
+                    &mut ObjectTask {
+                        mesh,
+                        r,
+                        inst: i,
+                        mailbox,
+                        c: &mut *c,
+                    },
+                );
             }
         }
     }

@@ -68,7 +68,10 @@ impl Kernel for Basics {
         for (p, h) in packets.iter().zip(&hits) {
             let want = bsp.intersect(l, p, l.splat_mask(true));
             for i in 0..L::N {
-                assert_eq!(h.lane(i).map(|h| (h.prim, h.inst)), want.lane(i).map(|h| (h.prim, h.inst)));
+                assert_eq!(
+                    h.lane(i).map(|h| (h.prim, h.inst)),
+                    want.lane(i).map(|h| (h.prim, h.inst))
+                );
             }
         }
         assert!(stats.beam_steps > 0 && stats.beam_entries > 0, "{stats:?}");
