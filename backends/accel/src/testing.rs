@@ -291,7 +291,7 @@ pub fn check_beam_queries<L: Lanes, A: Accel>(
     let active: Vec<L::Mask> = rays
         .chunks(L::N)
         .map(|c| {
-            let bits = if rng.next_u64() % 4 != 0 {
+            let bits = if !rng.next_u64().is_multiple_of(4) {
                 u32::MAX
             } else {
                 rng.next_u64() as u32
