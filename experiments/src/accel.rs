@@ -1036,15 +1036,13 @@ impl Kernel for CountedBeam<'_> {
         let mut c = TraversalStats::default();
         let per_beam = self.beam.div_ceil(L::N).max(1);
         for group in self.rays.chunks(per_beam * L::N) {
-            let (p, m): (Vec<Rays<L>>, Vec<_>) = group
-                .chunks(L::N)
-                .map(|ch| {
-                    (
-                        Rays::from_fn(l, |i| ch[i.min(ch.len() - 1)]),
-                        l.mask_from_fn(|i| i < ch.len()),
-                    )
-                })
-                .unzip();
+            // Loops, not iterator adaptors: those stay out of line, outside the kernel.
+            let mut p: Vec<Rays<L>> = Vec::new();
+            let mut m: Vec<L::Mask> = Vec::new();
+            for ch in group.chunks(L::N) {
+                p.push(Rays::from_fn(l, |i| ch[i.min(ch.len() - 1)]));
+                m.push(l.mask_from_fn(|i| i < ch.len()));
+            }
             if self.occlusion {
                 let mut o = vec![l.splat_mask(false); p.len()];
                 self.bsp.occluded_beam_counted(l, &p, &m, &mut o, &mut c);

@@ -67,13 +67,13 @@ impl<A: Accel> Renderer<'_, A> {
         let mut camera_hits: Vec<Hits<L>> = Vec::new();
         if self.packets == Packets::Beam && !packets.is_empty() {
             let mut clock = StageClock::start(self.time_stages);
-            let (rays, active): (Vec<Rays<L>>, Vec<L::Mask>) = packets
-                .iter()
-                .map(|p| {
-                    let cam = self.camera.rays(l, l.load(&p.xs), l.load(&p.ys));
-                    (cam.rays, l.mask_from_bits(p.bits))
-                })
-                .unzip();
+            // A loop, not iterator adaptors: those stay out of line, outside the kernel.
+            let mut rays: Vec<Rays<L>> = Vec::with_capacity(packets.len());
+            let mut active: Vec<L::Mask> = Vec::with_capacity(packets.len());
+            for p in packets {
+                rays.push(self.camera.rays(l, l.load(&p.xs), l.load(&p.ys)).rays);
+                active.push(l.mask_from_bits(p.bits));
+            }
             camera_hits = vec![Hits::miss(l); packets.len()];
             self.accel
                 .intersect_beam(l, &rays, &active, &mut camera_hits);

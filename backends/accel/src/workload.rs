@@ -297,14 +297,13 @@ impl<A: Accel> Kernel for TimeBeams<'_, A> {
 
     #[inline(always)]
     fn run<L: Lanes>(self, l: L) -> PassResult {
-        let (packets, masks): (Vec<Rays<L>>, Vec<L::Mask>) = self
-            .rays
-            .chunks(L::N)
-            .map(|c| {
-                let p = Rays::from_fn(l, |i| c[i.min(c.len() - 1)]);
-                (p, l.mask_from_fn(|i| i < c.len()))
-            })
-            .unzip();
+        // Loops, not iterator adaptors: those stay out of line, outside the kernel's features.
+        let mut packets: Vec<Rays<L>> = Vec::new();
+        let mut masks: Vec<L::Mask> = Vec::new();
+        for c in self.rays.chunks(L::N) {
+            packets.push(Rays::from_fn(l, |i| c[i.min(c.len() - 1)]));
+            masks.push(l.mask_from_fn(|i| i < c.len()));
+        }
         let per_beam = self.beam.div_ceil(L::N).max(1);
         let mut hits_buf = vec![crate::Hits::miss(l); per_beam];
         let mut occ_buf = vec![l.splat_mask(false); per_beam];
@@ -321,7 +320,9 @@ impl<A: Accel> Kernel for TimeBeams<'_, A> {
                 if self.occlusion {
                     let o = &mut occ_buf[..p.len()];
                     self.accel.occluded_beam(l, p, m, o);
-                    hits += o.iter().map(|o| o.count() as u64).sum::<u64>();
+                    for o in o.iter() {
+                        hits += o.count() as u64;
+                    }
                 } else {
                     let hs = &mut hits_buf[..p.len()];
                     self.accel.intersect_beam(l, p, m, hs);

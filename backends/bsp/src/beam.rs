@@ -556,7 +556,13 @@ pub(crate) fn scene_beam<L: Lanes, Q: QueryP<L>, C: Counters>(
 /// Whether every packet's query is finished.
 #[inline(always)]
 fn all_done<L: Lanes, Q: QueryP<L>>(qs: &[Q]) -> bool {
-    qs.iter().all(|q| q.done())
+    // A loop, not `Iterator::all`: that stays out of line, outside the kernel's features.
+    for q in qs {
+        if !q.done() {
+            return false;
+        }
+    }
+    true
 }
 
 /// Instance `i` for the world group `world` (packets `rays`): in object space, per group of
@@ -628,7 +634,11 @@ fn enter_beam<L: Lanes, Q: QueryP<L>, C: Counters>(
             obj.select(l, g);
             obj
         };
-        c.instance(bx.m.iter().map(|m| m.count()).sum());
+        let mut lanes = 0;
+        for m in &bx.m {
+            lanes += m.count();
+        }
+        c.instance(lanes);
         MeshBeam {
             l,
             mesh,

@@ -173,13 +173,14 @@ impl Bsp {
         c: &mut C,
     ) {
         assert!(rays.len() == active.len() && rays.len() == hits.len());
-        let mut qs: Vec<FirstP<L>> = rays
-            .iter()
-            .map(|r| FirstP {
+        // Loops, not iterator adaptors: those stay out of line, outside the kernel's features.
+        let mut qs: Vec<FirstP<L>> = Vec::with_capacity(rays.len());
+        for r in rays {
+            qs.push(FirstP {
                 best: r.tmax,
                 hits: Hits::miss(l),
-            })
-            .collect();
+            });
+        }
         crate::beam::scene_beam(l, self, rays, active, &mut qs, c);
         for (h, q) in hits.iter_mut().zip(qs) {
             *h = q.hits;
@@ -197,16 +198,15 @@ impl Bsp {
     ) {
         assert!(rays.len() == active.len() && rays.len() == occluded.len());
         let neg_inf = l.splat(f32::NEG_INFINITY);
-        let mut qs: Vec<AnyP<L>> = rays
-            .iter()
-            .zip(active)
-            .map(|(r, &a)| AnyP {
+        let mut qs: Vec<AnyP<L>> = Vec::with_capacity(rays.len());
+        for (r, &a) in rays.iter().zip(active) {
+            qs.push(AnyP {
                 tmax: r.tmax,
                 occluded: l.splat_mask(false),
                 active: a & r.valid(l),
                 neg_inf,
-            })
-            .collect();
+            });
+        }
         crate::beam::scene_beam(l, self, rays, active, &mut qs, c);
         for ((o, q), &a) in occluded.iter_mut().zip(qs).zip(active) {
             *o = q.occluded & a;
