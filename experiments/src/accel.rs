@@ -1081,7 +1081,7 @@ fn beam_report(t: &crate::Table) -> anyhow::Result<Option<String>> {
     if sizes.is_empty() {
         return Ok(None);
     }
-    sizes.sort_by(|a, b| (a.1 == "scalar", a.0).cmp(&(b.1 == "scalar", b.0)));
+    sizes.sort_by_key(|a| (a.1 == "scalar", a.0));
     let mut header = vec![
         "scene".to_owned(),
         "rays".to_owned(),

@@ -62,7 +62,9 @@ impl Span {
     /// True when the span bounds no ray.
     #[inline(always)]
     fn is_empty(&self) -> bool {
-        !(self.o_lo[0] <= self.o_hi[0])
+        self.o_lo[0]
+            .partial_cmp(&self.o_hi[0])
+            .is_none_or(|o| o.is_gt())
     }
 
     #[inline(always)]
@@ -293,9 +295,9 @@ impl<L: Lanes> BeamX<L> {
 fn limit_of<L: Lanes, Q: QueryP<L>>(l: L, bx: &BeamX<L>, qs: &[Q], a: usize, b: usize) -> f32 {
     let ninf = l.splat(f32::NEG_INFINITY);
     let mut lim = f32::NEG_INFINITY;
-    for j in a..b {
-        if bx.m[j].any() {
-            lim = lim.max(bx.m[j].select(qs[j].limit(), ninf).reduce_max());
+    for (m, q) in bx.m[a..b].iter().zip(&qs[a..b]) {
+        if m.any() {
+            lim = lim.max(m.select(q.limit(), ninf).reduce_max());
         }
     }
     lim
