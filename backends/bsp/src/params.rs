@@ -30,11 +30,8 @@ pub struct SahParams {
     /// [`BuildPreset::Fast`]: nodes of at most this many references are handed to the exact
     /// sweep (with perfect splits when [`Self::perfect_splits`] is set).
     ///
-    /// 256, measured (`build` example, median of 5 builds on one thread, on a shared 2-core
-    /// machine, so +-15%): fast over exact build time 0.94 (blob), 0.65 (100k soup), 0.73
-    /// (100k terrain), 0.73 (needles), SAH cost +1.3%, +0.6%, +2.3%, +7%; 64: 0.77, 0.57,
-    /// 0.91, 0.79 for +2.5%, +1.1%, +4.0%, +8.2%; 1,024: 0.97, 0.75, 0.73, 0.95 for +0.4%,
-    /// +0.3%, +1.7%, +6.0%.
+    /// 256: the measured trade-off of build time against SAH cost, against 64 and 1,024
+    /// (docs/findings/traversal.md, the fast build).
     pub sweep_below: u32,
     /// Reference budget, both builders: a tree over N triangles holds at most
     /// `ceil(max_refs_per_tri * N)` leaf references, for any input, e.g. thousands of long
@@ -65,14 +62,8 @@ pub enum BuildPreset {
     /// Shevtsov, Soupikov & Kapustin 2007), the exact sweep below; subtrees of large nodes
     /// built in parallel. The same tree on any number of threads.
     ///
-    /// Not the default: on one thread it built the built-in scenes in 0.5 to 0.95 of the
-    /// exact build's time (`build` example, shared 2-core machine), for trees that cost more
-    /// to traverse: SAH cost +0.3% to +2.5%, and per avx512 packet (`trace` example, `blob` /
-    /// `room`, 512x384) +1% / -0.4% inner nodes and +0.7% / 0% triangle tests on primary
-    /// rays, +2.0% / -0.3%
-    /// inner nodes on diffuse ones. End to end it depends on the render's length (not
-    /// measured): 1% more traversal time gives back blob's saved 0.05 s in a 5 s render, the
-    /// full terrain's 0.6 s in a minute.
+    /// Not the default: it builds faster for trees a little costlier to traverse, and no
+    /// frame-level measurement has shown it ahead yet (docs/findings/traversal.md).
     Fast,
 }
 
