@@ -2,10 +2,10 @@
 //! behind the command line): a built-in scene renders to a PNG and an EXR with a summary line;
 //! bad input fails with a message naming the problem, never a panic.
 
-use std::process::{Command, Output};
+use std::process::Output;
 
 fn coherent(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_coherent"))
+    coherent::require::command(env!("CARGO_BIN_EXE_coherent"))
         .args(args)
         .output()
         .expect("the coherent binary runs")

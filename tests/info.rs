@@ -1,10 +1,10 @@
 //! `coherent info` as other tools call it: it describes the machine, the build and every
 //! backend; bad subcommands fail with a message, never a panic.
 
-use std::process::{Command, Output};
+use std::process::Output;
 
 fn coherent(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_coherent"))
+    coherent::require::command(env!("CARGO_BIN_EXE_coherent"))
         .args(args)
         .output()
         .expect("the coherent binary runs")

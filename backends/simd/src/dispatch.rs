@@ -29,6 +29,8 @@ pub enum Backend {
     Pulp8,
     /// 16 lanes on pulp's portable operations, as pulp `V4` (AVX-512), chosen at run time.
     Pulp16,
+    /// 4 lanes on pulp's portable operations, as pulp `Neon` (aarch64 only).
+    Pulp4,
 }
 
 /// A computation generic over the lane type, run by [`Backend::run`].
@@ -61,7 +63,7 @@ pub enum BackendError {
 
 impl Backend {
     /// Every backend, narrowest first.
-    pub const ALL: [Backend; 9] = [
+    pub const ALL: [Backend; 10] = [
         Backend::Scalar,
         Backend::Sse,
         Backend::Wide4,
@@ -71,6 +73,7 @@ impl Backend {
         Backend::Avx512,
         Backend::Pulp8,
         Backend::Pulp16,
+        Backend::Pulp4,
     ];
 
     /// The name used on the command line and in results files.
@@ -85,6 +88,7 @@ impl Backend {
             Backend::Avx512 => "avx512",
             Backend::Pulp8 => "pulp8",
             Backend::Pulp16 => "pulp16",
+            Backend::Pulp4 => "pulp4",
         }
     }
 
@@ -92,7 +96,7 @@ impl Backend {
     pub fn lanes(self) -> usize {
         match self {
             Backend::Scalar => 1,
-            Backend::Sse | Backend::Wide4 => 4,
+            Backend::Sse | Backend::Wide4 | Backend::Pulp4 => 4,
             Backend::Wide8 | Backend::Avx2 | Backend::Pulp8 => 8,
             Backend::Wide16 | Backend::Avx512 | Backend::Pulp16 => 16,
         }
@@ -107,6 +111,7 @@ impl Backend {
             Backend::Avx2 | Backend::Avx512 | Backend::Pulp8 | Backend::Pulp16 => {
                 cfg!(all(feature = "pulp", target_arch = "x86_64"))
             }
+            Backend::Pulp4 => cfg!(all(feature = "pulp", target_arch = "aarch64")),
         }
     }
 
@@ -123,6 +128,9 @@ impl Backend {
                 {
                     format!("the `{}` backend needs an x86-64 target", self.name())
                 }
+                Backend::Pulp4 if cfg!(feature = "pulp") => {
+                    "the `pulp4` backend needs an aarch64 target (NEON)".to_string()
+                }
                 _ => format!(
                     "not compiled in: build with the cargo feature `{}`",
                     self.feature()
@@ -136,6 +144,7 @@ impl Backend {
             Backend::Avx512 | Backend::Pulp16 if !v4_supported() => {
                 Some("this CPU lacks AVX-512 F/BW/CD/DQ/VL (pulp V4)".to_string())
             }
+            Backend::Pulp4 if !neon_supported() => Some("this CPU lacks NEON".to_string()),
             _ => None,
         }
     }
@@ -146,7 +155,9 @@ impl Backend {
             Backend::Scalar => "",
             Backend::Sse => "sse",
             Backend::Wide4 | Backend::Wide8 | Backend::Wide16 => "wide",
-            Backend::Avx2 | Backend::Avx512 | Backend::Pulp8 | Backend::Pulp16 => "pulp",
+            Backend::Avx2 | Backend::Avx512 | Backend::Pulp8 | Backend::Pulp16 | Backend::Pulp4 => {
+                "pulp"
+            }
         }
     }
 
@@ -164,16 +175,25 @@ impl Backend {
     }
 
     /// The usable backend to measure at a packet width: the hand-written or run-time
-    /// dispatched one (scalar, sse, avx2, avx512) where this CPU runs it, else `wide`.
+    /// dispatched one (scalar, sse, avx2, avx512; pulp4 on aarch64, which has no hand-written
+    /// backend) where this CPU runs it, else `wide`.
     pub fn preferred_for_lanes(lanes: usize) -> Option<Backend> {
-        let prefs: &[Backend] = match lanes {
+        Backend::preference(lanes)
+            .iter()
+            .copied()
+            .find(|b| b.is_available())
+    }
+
+    /// The backends of a packet width in the order [`Backend::preferred_for_lanes`] picks
+    /// them, usable here or not (reports pick from the rows a results file has).
+    pub fn preference(lanes: usize) -> &'static [Backend] {
+        match lanes {
             1 => &[Backend::Scalar],
-            4 => &[Backend::Sse, Backend::Wide4],
+            4 => &[Backend::Sse, Backend::Pulp4, Backend::Wide4],
             8 => &[Backend::Avx2, Backend::Wide8],
             16 => &[Backend::Avx512, Backend::Wide16],
             _ => &[],
-        };
-        prefs.iter().copied().find(|b| b.is_available())
+        }
     }
 
     /// The widest hand-written or run-time dispatched backend usable here (the default for
@@ -261,15 +281,15 @@ impl Backend {
             });
         }
         match self {
-            Backend::Scalar => Ok(k.run(crate::scalar::Scalar)),
+            Backend::Scalar => Ok(run_on(k, crate::scalar::Scalar)),
             #[cfg(all(feature = "sse", target_arch = "x86_64"))]
-            Backend::Sse => Ok(k.run(crate::sse::Sse)),
+            Backend::Sse => Ok(run_on(k, crate::sse::Sse)),
             #[cfg(feature = "wide")]
-            Backend::Wide4 => Ok(k.run(crate::wide::Wide4)),
+            Backend::Wide4 => Ok(run_on(k, crate::wide::Wide4)),
             #[cfg(feature = "wide")]
-            Backend::Wide8 => Ok(k.run(crate::wide::Wide8)),
+            Backend::Wide8 => Ok(run_on(k, crate::wide::Wide8)),
             #[cfg(feature = "wide")]
-            Backend::Wide16 => Ok(k.run(crate::wide::Wide16)),
+            Backend::Wide16 => Ok(run_on(k, crate::wide::Wide16)),
             #[cfg(all(feature = "pulp", target_arch = "x86_64"))]
             Backend::Avx2 => {
                 let l = crate::avx2::Avx2::try_new().expect("checked by unavailable_reason");
@@ -298,10 +318,25 @@ impl Backend {
                 let s = pulp::x86::V4::try_new().expect("checked by unavailable_reason");
                 Ok(pulp::Simd::vectorize(s, crate::pulp::WithKernel(k)))
             }
+            #[cfg(all(feature = "pulp", target_arch = "aarch64"))]
+            Backend::Pulp4 => {
+                let s = pulp::aarch64::Neon::try_new().expect("checked by unavailable_reason");
+                Ok(pulp::Simd::vectorize(s, crate::pulp::WithKernel(k)))
+            }
             #[allow(unreachable_patterns)]
             _ => unreachable!("{} is not compiled in, checked above", self.name()),
         }
     }
+}
+
+/// `k` on the lanes `l`, in a function of its own per backend. The kernel inlines into it as
+/// into the `#[target_feature]` entry points of the run-time dispatched backends; kept out of
+/// [`Backend::run`], so that one kernel's copies for every backend are not one function of
+/// megabytes, which LLVM optimises in time superlinear in its size and cannot split between
+/// codegen units (a frame kernel took most of the library's build time).
+#[inline(never)]
+fn run_on<K: Kernel, L: Lanes>(k: K, l: L) -> K::Output {
+    k.run(l)
 }
 
 /// The environment variable naming the backends a test run must not skip.
@@ -321,8 +356,13 @@ fn cpu_reports(b: Backend) -> bool {
                     && has!("avx512dq")
                     && has!("avx512vl")
             }
+            Backend::Pulp4 => false,
             _ => true,
         }
+    }
+    #[cfg(target_arch = "aarch64")]
+    if b == Backend::Pulp4 {
+        return std::arch::is_aarch64_feature_detected!("neon");
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
@@ -349,6 +389,16 @@ fn v4_supported() -> bool {
 }
 #[cfg(not(all(feature = "pulp", target_arch = "x86_64")))]
 fn v4_supported() -> bool {
+    false
+}
+
+/// Whether this CPU runs pulp's `Neon`: pulp4.
+#[cfg(all(feature = "pulp", target_arch = "aarch64"))]
+fn neon_supported() -> bool {
+    pulp::aarch64::Neon::try_new().is_some()
+}
+#[cfg(not(all(feature = "pulp", target_arch = "aarch64")))]
+fn neon_supported() -> bool {
     false
 }
 

@@ -3,7 +3,7 @@
 //! all-zeros lane per ray, used to block rays that take another path.
 //!
 //! Semantics are fixed here, not by whatever instruction a backend happens to use, so that
-//! every backend gives the scalar backend's answer bit for bit (checked by `tests/lanes.rs`):
+//! every backend gives the scalar backend's answer bit for bit (checked by `backends/simd/tests/lanes.rs`):
 //!
 //! - `+ - * /`, `sqrt`, comparisons, conversions from `i32`: IEEE 754, round to nearest even.
 //! - `min(a, b)` is `if a < b { a } else { b }` and `max(a, b)` is `if a > b { a } else { b }`:
@@ -19,7 +19,7 @@
 //!   inputs and results; the x86 estimates treat denormal inputs as zero (giving inf) and
 //!   flush denormal results to zero.
 //! - `mul_add(a, b, c)` is fused on backends with FMA and two roundings elsewhere: either
-//!   result is accepted (`tests/lanes.rs` checks it is one of the two).
+//!   result is accepted (`backends/simd/tests/lanes.rs` checks it is one of the two).
 //! - Integer `+ - *` wrap; `>>` is arithmetic, [`SimdI32::shr_logical`] logical; shift counts
 //!   must be below 32.
 //! - `reduce_min`/`reduce_max` are exact for non-NaN lanes (the sign of a zero result is

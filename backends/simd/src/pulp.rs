@@ -1,16 +1,17 @@
 //! The portable `pulp` backends: one implementation of the lane trait, generic over
 //! `S: pulp::Simd`, written only with pulp's portable operations (`add_f32s`, `less_than_f32s`,
 //! `select_f32s`, ...; no `core::arch`). [`crate::dispatch`] runs it as `pulp8` on pulp's `V3`
-//! (AVX2 + FMA, 8 lanes) and `pulp16` on its `V4` (AVX-512, 16 lanes) through
+//! (AVX2 + FMA, 8 lanes) and `pulp16` on its `V4` (AVX-512, 16 lanes), and on aarch64 as
+//! `pulp4` on its `Neon` (4 lanes), through
 //! `Simd::vectorize` and [`pulp::WithSimd`], the entry point `pulp::Arch::dispatch` uses; the
-//! same code compiles for any other `Simd` pulp has (NEON, ...). Paper section 3's packets at
+//! same code compiles for any other `Simd` pulp has. Paper section 3's packets at
 //! the width the token's registers hold.
 //!
 //! This is the testbed's answer to "what does portability cost": the hand-written
 //! `avx2`/`avx512` backends do the same work with intrinsics.
 //!
 //! pulp 0.22 has no operation for some of the lane trait; these are written here on top of
-//! pulp, portably, and keep the trait's semantics bit for bit (checked by `tests/lanes.rs`).
+//! pulp, portably, and keep the trait's semantics bit for bit (checked by `backends/simd/tests/lanes.rs`).
 //! Most go lane by lane through an array with plain Rust (`f32::floor`, `as f32`, `if a < b`):
 //! inside the `#[target_feature]` function LLVM compiles such a loop into the one vector
 //! instruction the target has (`vroundps`, `vcvtdq2ps`, `vminps`, ...), and on a target without
@@ -122,6 +123,9 @@ pub type Pulp8 = PulpLanes<pulp::x86::V3>;
 /// `pulp16`: the portable backend on `V4` (AVX-512, 16 lanes).
 #[cfg(target_arch = "x86_64")]
 pub type Pulp16 = PulpLanes<pulp::x86::V4>;
+/// `pulp4`: the portable backend on `Neon` (aarch64, 4 lanes).
+#[cfg(target_arch = "aarch64")]
+pub type Pulp4 = PulpLanes<pulp::aarch64::Neon>;
 
 /// Runs a [`crate::Kernel`] with the lanes of whatever token pulp calls it with: the
 /// [`pulp::WithSimd`] that `vectorize`/`Arch::dispatch` take.

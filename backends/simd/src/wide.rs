@@ -174,11 +174,20 @@ macro_rules! wide_backend {
             fn ne(self, o: $f) -> $m { $m(self.0.simd_ne(o.0)) }
             #[inline(always)]
             fn min(self, o: $f) -> $f {
-                // `fast_min` is minps (`a < b ? a : b`) on x86; `min` would ignore NaN.
-                $f(self.0.fast_min(o.0))
+                // `fast_min` is minps (`a < b ? a : b`) on x86; `min` would ignore NaN, and on
+                // NEON `fast_min` is fmin, which passes NaN through: the trait's rule by select.
+                #[cfg(target_arch = "x86_64")]
+                { $f(self.0.fast_min(o.0)) }
+                #[cfg(not(target_arch = "x86_64"))]
+                { $f(self.0.simd_lt(o.0).bitselect(self.0, o.0)) }
             }
             #[inline(always)]
-            fn max(self, o: $f) -> $f { $f(self.0.fast_max(o.0)) }
+            fn max(self, o: $f) -> $f {
+                #[cfg(target_arch = "x86_64")]
+                { $f(self.0.fast_max(o.0)) }
+                #[cfg(not(target_arch = "x86_64"))]
+                { $f(self.0.simd_gt(o.0).bitselect(self.0, o.0)) }
+            }
             #[inline(always)]
             fn abs(self) -> $f { $f(self.0 & !$wf::splat(-0.0)) }
             #[inline(always)]
@@ -202,7 +211,17 @@ macro_rules! wide_backend {
             #[inline(always)]
             fn mul_add(self, b: $f, c: $f) -> $f { $f(self.0.mul_add(b.0, c.0)) }
             #[inline(always)]
-            fn to_i32(self) -> $i { $i(self.0.fast_trunc_int()) }
+            fn to_i32(self) -> $i {
+                // x86's cvttps gives i32::MIN (integer indefinite) out of range and for NaN;
+                // NEON's fcvtzs saturates and gives 0 for NaN: the trait's rule by select.
+                #[cfg(target_arch = "x86_64")]
+                { $i(self.0.fast_trunc_int()) }
+                #[cfg(not(target_arch = "x86_64"))]
+                {
+                    let inside: $wi = cast(self.abs().0.simd_lt($wf::splat(2_147_483_648.0)));
+                    $i(inside.bitselect(self.0.fast_trunc_int(), $wi::splat(i32::MIN)))
+                }
+            }
             #[inline(always)]
             fn to_bits(self) -> $i { $i(cast(self.0)) }
             #[inline(always)]

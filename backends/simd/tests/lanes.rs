@@ -12,8 +12,8 @@
 
 #![allow(clippy::needless_range_loop)] // lane-indexed comparisons read best as index loops
 
-use coherent::simd::lanes::{RECIP_REL_ERROR, RSQRT_REL_ERROR};
-use coherent::simd::{Backend, Kernel, Lanes, SimdF32, SimdI32, SimdMask};
+use coherent_simd::lanes::{RECIP_REL_ERROR, RSQRT_REL_ERROR};
+use coherent_simd::{Backend, Kernel, Lanes, SimdF32, SimdI32, SimdMask};
 use proptest::prelude::*;
 
 /// Values per test case: a multiple of every lane count.
@@ -437,6 +437,7 @@ backend_tests!(
     avx512 => Backend::Avx512,
     pulp8 => Backend::Pulp8,
     pulp16 => Backend::Pulp16,
+    pulp4 => Backend::Pulp4,
 );
 
 /// `pick8` by every combination of three masks, lanes mixed, on one backend: lane `i`
