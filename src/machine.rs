@@ -13,7 +13,7 @@ use std::time::{SystemTime, UNIX_EPOCH};
 /// run-time detection (`is_x86_feature_detected!`) and compile time (`cfg!(target_feature)`).
 macro_rules! x86_features {
     ($($feature:tt),* $(,)?) => {
-        /// The listed features this CPU has (run-time detection); empty off x86.
+        /// The listed features this CPU has (run-time detection); aarch64's own list there.
         fn detected_features() -> Vec<String> {
             #[allow(unused_mut)]
             let mut found = Vec::new();
@@ -23,6 +23,8 @@ macro_rules! x86_features {
                     found.push($feature.to_owned());
                 })*
             }
+            #[cfg(target_arch = "aarch64")]
+            found.extend(aarch64_features());
             found
         }
 
@@ -37,6 +39,25 @@ macro_rules! x86_features {
             enabled
         }
     };
+}
+
+/// The SIMD-relevant aarch64 features this CPU has (run-time detection).
+#[cfg(target_arch = "aarch64")]
+fn aarch64_features() -> Vec<String> {
+    use std::arch::is_aarch64_feature_detected as has;
+    let found = [
+        ("neon", has!("neon")),
+        ("fp16", has!("fp16")),
+        ("fcma", has!("fcma")),
+        ("dotprod", has!("dotprod")),
+        ("sve", has!("sve")),
+        ("sve2", has!("sve2")),
+    ];
+    found
+        .into_iter()
+        .filter(|&(_, yes)| yes)
+        .map(|(name, _)| name.to_owned())
+        .collect()
 }
 
 x86_features!(
@@ -111,6 +132,14 @@ pub struct Machine {
     /// (`Backend::skipped`): experiments and tests skip them.
     #[serde(default)]
     pub skipped_backends: Vec<String>,
+    /// The instruction set this program was built for (`x86_64`, `aarch64`).
+    #[serde(default)]
+    pub arch: String,
+    /// Empty when the program runs on a CPU of its own instruction set; else what runs it
+    /// (an aarch64 build under user-mode emulation on an x86-64 CPU): its times are the
+    /// emulator's, not measurements of the code, and reports say so instead of comparing them.
+    #[serde(default)]
+    pub emulated: String,
 }
 
 impl Machine {
@@ -138,7 +167,14 @@ impl Machine {
                 .into_iter()
                 .map(|(b, why)| format!("{b}: {why}"))
                 .collect(),
+            arch: std::env::consts::ARCH.to_owned(),
+            emulated: emulation(&cpuinfo, std::env::consts::ARCH).unwrap_or_default(),
         }
+    }
+
+    /// Whether this program ran under emulation (see [`Machine::emulated`]).
+    pub fn is_emulated(&self) -> bool {
+        !self.emulated.is_empty()
     }
 
     /// Whether the CPU has `feature` (a name as in [`Machine::cpu_features`]).
@@ -156,6 +192,24 @@ impl Machine {
     pub fn from_json(text: &str) -> Result<Machine, serde_json::Error> {
         serde_json::from_str(text)
     }
+}
+
+/// `Some(description)` when `/proc/cpuinfo` describes a CPU of another instruction set than
+/// `arch`, the program's: a user-mode emulator (qemu-user) runs it and passes the host's
+/// description through. x86 CPUs list `vendor_id` and `flags`; ARM ones `CPU implementer` and
+/// `Features`.
+fn emulation(cpuinfo: &str, arch: &str) -> Option<String> {
+    let x86 =
+        cpuinfo_field(cpuinfo, "vendor_id").is_some() && cpuinfo_field(cpuinfo, "flags").is_some();
+    let arm = cpuinfo_field(cpuinfo, "CPU implementer").is_some();
+    let host = match (x86, arm) {
+        (true, false) => "x86_64",
+        (false, true) => "aarch64",
+        _ => return None,
+    };
+    (host != arch).then(|| {
+        format!("an {arch} program on an {host} CPU, under user-mode emulation (qemu-user)")
+    })
 }
 
 /// The CPU model: `model name` of `/proc/cpuinfo`, else the CPUID brand string.
@@ -336,6 +390,23 @@ mod tests {
         assert_eq!(cpu_model(info), "Test CPU @ 3GHz");
         assert_eq!(physical_cores(info), Some(2)); // two packages, one core each, SMT twin
         assert_eq!(physical_cores("processor : 0\n"), None);
+    }
+
+    #[test]
+    fn a_cpu_of_another_instruction_set_means_emulation() {
+        let x86 = "processor\t: 0\nvendor_id\t: GenuineIntel\nflags\t\t: fpu sse sse2\n";
+        let arm =
+            "processor\t: 0\nBogoMIPS\t: 50.00\nFeatures\t: fp asimd\nCPU implementer\t: 0x41\n";
+        assert_eq!(emulation(x86, "x86_64"), None);
+        assert_eq!(emulation(arm, "aarch64"), None);
+        let e = emulation(x86, "aarch64").unwrap();
+        assert!(
+            e.contains("aarch64 program") && e.contains("x86_64 CPU"),
+            "{e}"
+        );
+        assert!(emulation(arm, "x86_64").is_some());
+        assert_eq!(emulation("", "aarch64"), None);
+        assert_eq!(Machine::detect().arch, std::env::consts::ARCH);
     }
 
     #[test]

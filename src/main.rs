@@ -85,7 +85,8 @@ struct RenderArgs {
     /// A scene file (.toml), a built-in scene's name, or a bare mesh file.
     scene: String,
     /// Lane backend: scalar, sse, wide4, wide8, wide16, avx2, avx512 (hand-written), pulp8,
-    /// pulp16 (pulp's portable operations) (default: the widest hand-written one usable here).
+    /// pulp16 (pulp's portable operations; pulp4 on aarch64) (default: the widest
+    /// hand-written one usable here, else the widest `wide`).
     #[arg(long)]
     backend: Option<String>,
     /// Accelerator: bsp, embree, obvhs, brute.

@@ -2,8 +2,29 @@
 //! HDR maps, scene assets) is missing skips with a message, unless its switch asks for the
 //! data, and then it fails. `scripts/test.sh` and CI set them.
 //!
+//! Also here: [`command`], which runs a test's built executable through an emulator when the
+//! tests were cross-built.
+//!
 //! `COHERENT_REQUIRE_BACKENDS` is not one of these: it holds a list of backend names and is
 //! read by `coherent_simd::Backend::required`.
+
+/// The environment variable naming a program that runs the built binaries in tests: an
+/// emulator (`qemu-aarch64-static`) when the tests were cross-built for another architecture
+/// (`scripts/cross-test.sh` sets it). Unset: the binary runs directly.
+pub const RUNNER_ENV: &str = "COHERENT_TEST_RUNNER";
+
+/// A command that runs the built executable `exe` (a test's `env!("CARGO_BIN_EXE_...")`),
+/// through [`RUNNER_ENV`]'s program when it is set.
+pub fn command(exe: &str) -> std::process::Command {
+    match std::env::var_os(RUNNER_ENV).filter(|r| !r.is_empty()) {
+        Some(runner) => {
+            let mut c = std::process::Command::new(runner);
+            c.arg(exe);
+            c
+        }
+        None => std::process::Command::new(exe),
+    }
+}
 
 /// Whether the switch `name` (e.g. `"COHERENT_REQUIRE_MESHES"`) asks for its data: set to
 /// anything but the empty string or `0`, so `=1`, `=yes` and `=true` all require, and `=0` or

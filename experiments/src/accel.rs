@@ -359,6 +359,10 @@ fn pass_of(
         #[cfg(feature = "obvhs")]
         AnyAccel::Obvhs(a) => pass_any(a, rays, kind.occlusion(), backend),
         AnyAccel::Brute(_) => anyhow::bail!("brute force is a test reference, not timed"),
+        // The accelerator is compiled into `coherent` (another crate asked for its feature)
+        // but not into the experiments.
+        #[allow(unreachable_patterns)]
+        _ => anyhow::bail!("{} is not compiled into the experiments", a.name()),
     }
 }
 

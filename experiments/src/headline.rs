@@ -54,6 +54,18 @@ pub fn render(ctx: &Ctx, registry: &[Experiment]) -> String {
          the same run (`wide` and `pulp` are the portable backends; their lane counts follow \
          the name). The sections below have every row.\n\n",
     );
+    let emulated = std::fs::read_to_string(ctx.path("machine.json"))
+        .ok()
+        .and_then(|t| Machine::from_json(&t).ok())
+        .filter(Machine::is_emulated);
+    if let Some(m) = &emulated {
+        md.push_str(&format!(
+            "**Under emulation: these times are not measurements.** This run is {}. Every \
+             time below is the emulator's, so the run is a smoke test that each experiment \
+             runs on {}; this screen compares none of them with the paper.\n\n",
+            m.emulated, m.arch
+        ));
+    }
     let rows: Vec<Vec<String>> = [
         ("table1", table1_row(ctx)),
         ("table2", table2_row(ctx)),
@@ -73,6 +85,7 @@ pub fn render(ctx: &Ctx, registry: &[Experiment]) -> String {
         );
         let (what, paper, ours, file) = row;
         let ours = match ours {
+            Ok(Some(_)) if emulated.is_some() => "*emulated run: not compared*".to_owned(),
             Ok(Some(text)) => text,
             Ok(None) => format!("*not run into this folder yet (`reproduce --only {name}`)*"),
             Err(e) => format!("**cannot read:** {e:#}"),
@@ -392,9 +405,18 @@ fn machine_line(ctx: &Ctx) -> String {
     };
     let mut md = format!(
         "**Machine** (the last run's, [`machine.json`](machine.json)): {}, {} cores / {} \
-         threads; features {features}; build: {} {build} (target features {target}, \
+         threads; features {features}; build: {} {build}{} (target features {target}, \
          {rustflags}), {}.",
-        m.cpu, m.cores, m.threads, m.profile, m.rustc
+        m.cpu,
+        m.cores,
+        m.threads,
+        m.profile,
+        if m.arch.is_empty() {
+            String::new()
+        } else {
+            format!(" for {}", m.arch)
+        },
+        m.rustc
     );
     // Experiments measured on another CPU model, grouped by it.
     let mut elsewhere: Vec<(String, Vec<String>)> = Vec::new();
@@ -476,6 +498,8 @@ mod tests {
         m.target_features = vec!["sse".into(), "sse2".into()];
         m.rustflags = String::new();
         m.profile = "release".into();
+        m.arch = "x86_64".into();
+        m.emulated = String::new();
         let json = m.to_json();
         let json = crate::machine_keys::set_key(&json, "build", "\"portable\"");
         let json = crate::machine_keys::set_key(
@@ -545,12 +569,34 @@ mod tests {
         assert!(
             md.contains(
                 "Test CPU 9000, 2 cores / 4 threads; features sse2 avx2 (+1 more); build: \
-                 release portable (target features sse sse2, no RUSTFLAGS)"
+                 release portable for x86_64 (target features sse sse2, no RUSTFLAGS)"
             ),
             "{md}"
         );
         assert!(
             md.contains("Measured on another host: accel on Other CPU"),
+            "{md}"
+        );
+    }
+
+    #[test]
+    fn an_emulated_run_says_so_and_compares_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let ctx = Ctx::new(dir.path(), true, Machine::detect());
+        folder(&ctx);
+        let text = std::fs::read_to_string(ctx.path("machine.json")).unwrap();
+        let mut m = Machine::from_json(&text).unwrap();
+        m.arch = "aarch64".into();
+        m.emulated = "an aarch64 program on an x86_64 CPU, under user-mode emulation".into();
+        write(&ctx, "machine.json", &m.to_json());
+        let md = render(&ctx, crate::EXPERIMENTS);
+        assert!(md.contains("these times are not measurements"), "{md}");
+        assert!(md.contains("an aarch64 program on an x86_64 CPU"), "{md}");
+        assert!(md.contains("for aarch64"), "{md}");
+        // No measured range on the first screen: every row that has a CSV says it is not compared.
+        assert_eq!(
+            md.matches("*emulated run: not compared*").count(),
+            5,
             "{md}"
         );
     }

@@ -330,7 +330,7 @@ const PORTABILITY_KERNELS: [&str; 8] = [
 
 /// Per width: the hand-written, the pulp (portable) and the `wide` backend.
 const FAMILIES: [(usize, Option<&str>, Option<&str>, &str); 3] = [
-    (4, Some("sse"), None, "wide4"),
+    (4, Some("sse"), Some("pulp4"), "wide4"),
     (8, Some("avx2"), Some("pulp8"), "wide8"),
     (16, Some("avx512"), Some("pulp16"), "wide16"),
 ];

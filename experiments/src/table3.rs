@@ -101,9 +101,21 @@ const STAGES: [&str; 7] = [
     "tonemap",
 ];
 
-/// The backends the breakdown plot shows (scalar and the hand-written ones of 4, 8 and 16
-/// lanes).
-const PLOTTED: [&str; 4] = ["scalar", "sse", "avx2", "avx512"];
+/// The backends the plots show, of those `present`: scalar and, at 4, 8 and 16 lanes, the
+/// first present in [`Backend::preference`]'s order (sse, avx2, avx512 on x86-64; pulp4,
+/// wide8, wide16 on aarch64).
+fn plotted<S: AsRef<str>>(present: &[S]) -> Vec<&'static str> {
+    let has = |b: &Backend| present.iter().any(|p| p.as_ref() == b.name());
+    [1, 4, 8, 16]
+        .into_iter()
+        .filter_map(|n| {
+            Backend::preference(n)
+                .iter()
+                .find(|b| has(b))
+                .map(|b| b.name())
+        })
+        .collect()
+}
 
 /// The paper's Table 3.
 pub(crate) const PAPER: PaperTable = PaperTable {
@@ -311,10 +323,12 @@ pub fn run_plan(
         let random_lights = scene.lights.iter().any(|x| x.takes_random_numbers());
         if random_lights {
             // The hand-written backends only (the plot's), to keep the run's length.
+            let names: Vec<&str> = backends.iter().map(|b| b.name()).collect();
+            let shown = plotted(&names);
             let backends: Vec<Backend> = backends
                 .iter()
                 .copied()
-                .filter(|b| PLOTTED.contains(&b.name()))
+                .filter(|b| shown.contains(&b.name()))
                 .collect();
             let backends = &backends[..];
             r.light_samples = LightSamples::Tile;
@@ -435,8 +449,10 @@ fn plots(ctx: &Ctx) -> anyhow::Result<()> {
         let main = ctx.read_csv(FILE, HEADER)?;
         let scenes = t.distinct("scene")?;
         let mut series = Vec::new();
-        for b in t.distinct("backend")? {
-            if b == "scalar" || !PLOTTED.contains(&b.as_str()) {
+        let present = t.distinct("backend")?;
+        let shown = plotted(&present);
+        for b in present {
+            if b == "scalar" || !shown.contains(&b.as_str()) {
                 continue;
             }
             let (mut pixel, mut tile) = (Vec::new(), Vec::new());
@@ -475,10 +491,11 @@ fn plots(ctx: &Ctx) -> anyhow::Result<()> {
         && !t.rows.is_empty()
     {
         let mut categories = Vec::new();
+        let shown = plotted(&t.distinct("backend")?);
         for s in t.distinct("scene")? {
             for b in t.distinct("backend")? {
                 // The plot keeps the native backends (the table has them all).
-                if PLOTTED.contains(&b.as_str())
+                if shown.contains(&b.as_str())
                     && find(&t, &[("scene", &s), ("backend", &b)])?.is_some()
                 {
                     categories.push((s.clone(), b));
@@ -513,7 +530,7 @@ fn plots(ctx: &Ctx) -> anyhow::Result<()> {
         let mut categories: Vec<String> = STAGES.iter().map(|s| s.to_string()).collect();
         categories.push("frame".into());
         let mut series = Vec::new();
-        for be in PLOTTED {
+        for be in shown {
             let mut per_stage = vec![Vec::new(); categories.len()];
             for s in &scenes {
                 if let Some(StageSpeedups {

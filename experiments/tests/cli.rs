@@ -2,10 +2,10 @@
 //! never a panic; a report-only run writes the README.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
 fn reproduce(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_reproduce"))
+    coherent::require::command(env!("CARGO_BIN_EXE_reproduce"))
         .args(args)
         .output()
         .expect("the reproduce binary runs")

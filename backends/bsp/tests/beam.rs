@@ -164,7 +164,7 @@ macro_rules! beam_tests {
 // Every width (1, 4, 8, 16) on the hand-written backends, and 16 lanes on `wide` for the
 // machines without AVX-512. The beam code is generic over the width; each stamped backend
 // compiles every beam walk again, so the list stays short (the lane trait itself is checked
-// on every backend by `tests/lanes.rs`).
+// on every backend by `backends/simd/tests/lanes.rs`).
 beam_tests!(scalar, Backend::Scalar);
 beam_tests!(sse, Backend::Sse);
 beam_tests!(avx2, Backend::Avx2);

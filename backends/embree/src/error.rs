@@ -10,6 +10,15 @@ pub enum EmbreeError {
          install, or build without the `embree` feature"
     )]
     NotFound { tried: String },
+    /// This target has no Embree 4 in the registries the native set-up fetches from, and
+    /// `EMBREE_DIR` names none.
+    #[error(
+        "no Embree 4 library for {target}: the registries the project fetches from have none \
+         (PyPI's embreex has x86-64 wheels only; Debian's {target} packages have Embree 3.13); \
+         fix: build Embree 4 for this machine and set EMBREE_DIR to its install, or build \
+         without the `embree` feature"
+    )]
+    NotForTarget { target: &'static str },
     /// A library was found but is not an Embree 4 this backend can use.
     #[error(
         "the Embree library {path} is not usable: {why}; fix: delete .native/embree and run \
