@@ -20,7 +20,6 @@ mod abi;
 
 pub use device::Device;
 pub use error::EmbreeError;
-pub use library::target_skip_reason;
 pub use packet::{COHERENT_CONE_DEGREES, PacketK};
 pub use query::valid_lanes;
 pub use scene::{BuildQuality, Coherence, Embree, EmbreeParams};

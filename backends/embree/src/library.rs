@@ -37,21 +37,7 @@ fn candidates() -> Vec<PathBuf> {
 
 /// Whether the registries have an Embree 4 for this target (`scripts/native.py` fetches the
 /// x86-64 `embreex` wheel): elsewhere only `EMBREE_DIR` can name one.
-pub const TARGET_IN_REGISTRIES: bool = cfg!(target_arch = "x86_64");
-
-/// The reason Embree is not tried on this target, or `None`: a target without an Embree 4
-/// in the registries, unless `EMBREE_DIR` names one built for it.
-pub fn target_skip_reason() -> Option<String> {
-    if TARGET_IN_REGISTRIES || std::env::var_os("EMBREE_DIR").is_some() {
-        return None;
-    }
-    Some(
-        EmbreeError::NotForTarget {
-            target: std::env::consts::ARCH,
-        }
-        .to_string(),
-    )
-}
+const TARGET_IN_REGISTRIES: bool = cfg!(target_arch = "x86_64");
 
 fn load() -> Result<Api, EmbreeError> {
     if !TARGET_IN_REGISTRIES && std::env::var_os("EMBREE_DIR").is_none() {
