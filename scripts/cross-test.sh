@@ -4,7 +4,7 @@
 # emulator. Needs root and apt (a Debian bookworm system, as the native set-up does).
 #
 # Usage: scripts/cross-test.sh [--all] [--reproduce] [extra cargo test arguments]
-#   (default) what CI runs, chosen to fit its time: the crates below the renderer, whole: the
+#   (default) the crates below the renderer, whole (about 8 minutes from a clean tree): the
 #             lane trait bit for bit on every aarch64 backend (backends/simd/tests/lanes.rs),
 #             the approximations' error bounds, the traversal interface and the two-level BSP
 #             against brute force (packets and builds; beams and watertightness with --all);
