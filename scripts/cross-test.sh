@@ -74,8 +74,10 @@ export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER=qemu-aarch64-static
 # The tests that start the built `coherent` and `reproduce` run them through it too
 # (`coherent::require::command`), so the kernel needs no binfmt registration.
 export COHERENT_TEST_RUNNER=qemu-aarch64-static
-# The backends aarch64 has must run, never be skipped: the target's list, not the host's.
-export COHERENT_REQUIRE_BACKENDS="${COHERENT_REQUIRE_BACKENDS:-$(scripts/required-backends.sh aarch64)}"
+# The backends aarch64 has must run, never be skipped: the target's list, not the host's (an
+# inherited list, as CI exports for the x86-64 tests, names x86 backends).
+COHERENT_REQUIRE_BACKENDS="$(scripts/required-backends.sh aarch64)"
+export COHERENT_REQUIRE_BACKENDS
 echo "cross-test.sh: $target, $(rustc -V), COHERENT_REQUIRE_BACKENDS=$COHERENT_REQUIRE_BACKENDS"
 
 embree_reason="no Embree 4 for aarch64 in the registries (PyPI's embreex has x86-64 wheels only; Debian's arm64 has Embree 3.13)"
