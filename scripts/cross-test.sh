@@ -78,7 +78,7 @@ export COHERENT_TEST_RUNNER=qemu-aarch64-static
 # inherited list, as CI exports for the x86-64 tests, names x86 backends).
 COHERENT_REQUIRE_BACKENDS="$(scripts/required-backends.sh aarch64)"
 export COHERENT_REQUIRE_BACKENDS
-echo "cross-test.sh: $target, $(rustc -V), COHERENT_REQUIRE_BACKENDS=$COHERENT_REQUIRE_BACKENDS"
+echo "cross-test.sh: $target, $($RUSTC -V), COHERENT_REQUIRE_BACKENDS=$COHERENT_REQUIRE_BACKENDS"
 
 embree_reason="no Embree 4 for aarch64 in the registries (PyPI's embreex has x86-64 wheels only; Debian's arm64 has Embree 3.13)"
 echo "cross-test.sh: skipped: the coherent-embree crate's tests and every test named *embree*: $embree_reason"

@@ -85,8 +85,9 @@ struct RenderArgs {
     /// A scene file (.toml), a built-in scene's name, or a bare mesh file.
     scene: String,
     /// Lane backend: scalar, sse, wide4, wide8, wide16, avx2, avx512 (hand-written), pulp8,
-    /// pulp16 (pulp's portable operations; pulp4 on aarch64) (default: the widest
-    /// hand-written one usable here, else the widest `wide`).
+    /// pulp16 (pulp's portable operations; pulp4 on aarch64), scalar-est (scalar with the
+    /// SIMD backends' rsqrt/recip estimates; x86-64) (default: the widest hand-written one
+    /// usable here, else the widest `wide`).
     #[arg(long)]
     backend: Option<String>,
     /// Accelerator: bsp, embree, obvhs, brute.
@@ -264,7 +265,7 @@ fn info(json: bool) -> anyhow::Result<()> {
     writeln!(out, "  target features: {}", list(&machine.target_features))?;
     writeln!(out, "  git:             {}", machine.git_rev)?;
     writeln!(out, "backends:")?;
-    for backend in Backend::ALL {
+    for backend in Backend::every() {
         let lanes = match backend.lanes() {
             1 => "1 lane".to_owned(),
             n => format!("{n} lanes"),
@@ -274,7 +275,7 @@ fn info(json: bool) -> anyhow::Result<()> {
             (true, Some(reason)) => format!("compiled in, not usable here: {reason}"),
             (false, Some(reason)) => reason,
         };
-        writeln!(out, "  {:<7} {lanes:<9} {state}", backend.name())?;
+        writeln!(out, "  {:<10} {lanes:<9} {state}", backend.name())?;
     }
     let skipped: Vec<String> = Backend::skipped()
         .into_iter()

@@ -28,7 +28,7 @@ fn info_lists_the_machine_the_build_and_every_backend() {
     ] {
         assert!(text.contains(field), "`{field}` missing from:\n{text}");
     }
-    for backend in coherent::simd::Backend::ALL {
+    for backend in coherent::simd::Backend::every() {
         let line = text
             .lines()
             .find(|l| l.trim_start().starts_with(&format!("{} ", backend.name())))

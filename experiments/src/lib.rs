@@ -32,6 +32,7 @@ pub mod regroup;
 pub mod table1;
 pub mod table2;
 pub mod table3;
+mod factors;
 pub mod table4;
 pub mod table5;
 

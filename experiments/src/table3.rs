@@ -22,6 +22,7 @@ use coherent::render::{LightSamples, RenderStats};
 use coherent::simd::Backend;
 
 use crate::ctx::Ctx;
+use crate::factors;
 use crate::experiment::{Experiment, Status};
 use crate::frames::{self, Loaded, Plan};
 use crate::plot::{BarChart, LineChart, Series};
@@ -35,6 +36,7 @@ pub const EXPERIMENT: Experiment = Experiment {
     paper: "Table 3 (section 7)",
     csv: &[
         FILE,
+        factors::FILE,
         BREAKDOWN_FILE,
         COHERENCE_FILE,
         LIGHT_SAMPLES_FILE,
@@ -42,6 +44,7 @@ pub const EXPERIMENT: Experiment = Experiment {
     ],
     plots: &[
         "table3_speedup",
+        "table3_factors",
         "table3_breakdown",
         "table3_stage_efficiency",
         "table3_coherence",
@@ -181,6 +184,7 @@ pub fn run_plan(
     let mut breakdown = ctx.csv(BREAKDOWN_FILE, BREAKDOWN_HEADER)?;
     let mut coherence = ctx.csv(COHERENCE_FILE, COHERENCE_HEADER)?;
     let mut shared = ctx.csv(LIGHT_SAMPLES_FILE, LIGHT_SAMPLES_HEADER)?;
+    let mut factor_rows = ctx.csv(factors::FILE, factors::HEADER)?;
     let specs = frames::scene_specs(plan);
     let bar = ctx.progress(specs.len() as u64, "table3");
     for (name, spec) in &specs {
@@ -272,6 +276,17 @@ pub fn run_plan(
                 csv.row(&cells)?;
             }
         }
+        // Table 3 explained: arithmetic, culling, lanes and beams, each alone.
+        factors::measure(
+            &mut factor_rows,
+            &pool,
+            name,
+            &mut renderers,
+            backends,
+            plan,
+            reference.as_ref().expect("the scalar + BSP image"),
+            rounds,
+        )?;
         // Coherence by depth, once per packet width (the BSP's frames).
         let mut widths = Vec::new();
         for &b in backends {
@@ -379,6 +394,7 @@ pub fn run_plan(
     breakdown.finish()?;
     coherence.finish()?;
     shared.finish()?;
+    factor_rows.finish()?;
     let mut out = ctx.csv(SKIPPED_FILE, SKIPPED_HEADER)?;
     for (item, why) in &skipped {
         out.row(&[item, why])?;
@@ -388,7 +404,7 @@ pub fn run_plan(
 }
 
 /// The row of `t` with these key cells.
-fn find(t: &Table, keys: &[(&str, &str)]) -> anyhow::Result<Option<usize>> {
+pub(crate) fn find(t: &Table, keys: &[(&str, &str)]) -> anyhow::Result<Option<usize>> {
     'rows: for r in 0..t.rows.len() {
         for (c, v) in keys {
             if t.get(r, c)? != *v {
@@ -401,6 +417,7 @@ fn find(t: &Table, keys: &[(&str, &str)]) -> anyhow::Result<Option<usize>> {
 }
 
 fn plots(ctx: &Ctx) -> anyhow::Result<()> {
+    factors::plot(ctx)?;
     if let Some(t) = ctx.read_csv(FILE, HEADER)?
         && !t.rows.is_empty()
     {
@@ -687,6 +704,9 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     md.push_str(&targets(&t)?);
     if let Some(p) = ctx.plot_markdown("table3_speedup", "whole-frame speedup per scene") {
         md.push_str(&p);
+    }
+    if let Some(f) = factors::report(ctx)? {
+        md.push_str(&f);
     }
 
     let scenes = t.distinct("scene")?;

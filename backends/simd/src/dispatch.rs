@@ -31,6 +31,10 @@ pub enum Backend {
     Pulp16,
     /// 4 lanes on pulp's portable operations, as pulp `Neon` (aarch64 only).
     Pulp4,
+    /// 1 lane, the scalar backend with the SIMD backends' estimates for `rsqrt` and `recip`
+    /// (x86-64 only): the arithmetic factor of Table 3 on its own. Not swept (not in
+    /// [`Backend::ALL`]).
+    ScalarEst,
 }
 
 /// A computation generic over the lane type, run by [`Backend::run`].
@@ -76,6 +80,32 @@ impl Backend {
         Backend::Pulp4,
     ];
 
+    /// The backends outside the sweeps, which the command line and the factor table of
+    /// `table3` name: the scalar backend with estimated arithmetic.
+    pub const FACTORS: [Backend; 1] = [Backend::ScalarEst];
+
+    /// Every backend the command line takes: [`Backend::ALL`], then [`Backend::FACTORS`].
+    pub fn every() -> impl Iterator<Item = Backend> {
+        Backend::ALL.into_iter().chain(Backend::FACTORS)
+    }
+
+    /// Whether `rsqrt` and `recip` are the hardware's estimates (`estimate`: sse, avx2,
+    /// avx512, scalar-est, and wide on x86-64) or exact divisions and square roots (`exact`:
+    /// scalar, the pulp backends, wide elsewhere): the `arithmetic` column of the factor table.
+    pub fn arithmetic(self) -> &'static str {
+        match self {
+            Backend::Scalar | Backend::Pulp8 | Backend::Pulp16 | Backend::Pulp4 => "exact",
+            Backend::Sse | Backend::Avx2 | Backend::Avx512 | Backend::ScalarEst => "estimate",
+            Backend::Wide4 | Backend::Wide8 | Backend::Wide16 => {
+                if cfg!(target_arch = "x86_64") {
+                    "estimate"
+                } else {
+                    "exact"
+                }
+            }
+        }
+    }
+
     /// The name used on the command line and in results files.
     pub fn name(self) -> &'static str {
         match self {
@@ -89,13 +119,14 @@ impl Backend {
             Backend::Pulp8 => "pulp8",
             Backend::Pulp16 => "pulp16",
             Backend::Pulp4 => "pulp4",
+            Backend::ScalarEst => "scalar-est",
         }
     }
 
     /// Lanes per packet.
     pub fn lanes(self) -> usize {
         match self {
-            Backend::Scalar => 1,
+            Backend::Scalar | Backend::ScalarEst => 1,
             Backend::Sse | Backend::Wide4 | Backend::Pulp4 => 4,
             Backend::Wide8 | Backend::Avx2 | Backend::Pulp8 => 8,
             Backend::Wide16 | Backend::Avx512 | Backend::Pulp16 => 16,
@@ -106,6 +137,7 @@ impl Backend {
     pub fn compiled(self) -> bool {
         match self {
             Backend::Scalar => true,
+            Backend::ScalarEst => cfg!(target_arch = "x86_64"),
             Backend::Sse => cfg!(all(feature = "sse", target_arch = "x86_64")),
             Backend::Wide4 | Backend::Wide8 | Backend::Wide16 => cfg!(feature = "wide"),
             Backend::Avx2 | Backend::Avx512 | Backend::Pulp8 | Backend::Pulp16 => {
@@ -131,6 +163,9 @@ impl Backend {
                 Backend::Pulp4 if cfg!(feature = "pulp") => {
                     "the `pulp4` backend needs an aarch64 target (NEON)".to_string()
                 }
+                Backend::ScalarEst => "the `scalar-est` backend needs an x86-64 target (the \
+                    estimate instructions of the SIMD backends it stands in for)"
+                    .to_string(),
                 _ => format!(
                     "not compiled in: build with the cargo feature `{}`",
                     self.feature()
@@ -152,7 +187,7 @@ impl Backend {
     /// The cargo feature that compiles the backend in (`scalar` has none).
     pub fn feature(self) -> &'static str {
         match self {
-            Backend::Scalar => "",
+            Backend::Scalar | Backend::ScalarEst => "",
             Backend::Sse => "sse",
             Backend::Wide4 | Backend::Wide8 | Backend::Wide16 => "wide",
             Backend::Avx2 | Backend::Avx512 | Backend::Pulp8 | Backend::Pulp16 | Backend::Pulp4 => {
@@ -282,6 +317,8 @@ impl Backend {
         }
         match self {
             Backend::Scalar => Ok(run_on(k, crate::scalar::Scalar)),
+            #[cfg(target_arch = "x86_64")]
+            Backend::ScalarEst => Ok(run_on(k, crate::scalar_est::ScalarEst)),
             #[cfg(all(feature = "sse", target_arch = "x86_64"))]
             Backend::Sse => Ok(run_on(k, crate::sse::Sse)),
             #[cfg(feature = "wide")]
@@ -368,7 +405,12 @@ fn cpu_reports(b: Backend) -> bool {
     {
         !matches!(
             b,
-            Backend::Sse | Backend::Avx2 | Backend::Avx512 | Backend::Pulp8 | Backend::Pulp16
+            Backend::Sse
+                | Backend::Avx2
+                | Backend::Avx512
+                | Backend::Pulp8
+                | Backend::Pulp16
+                | Backend::ScalarEst
         )
     }
 }
@@ -411,13 +453,11 @@ impl fmt::Display for Backend {
 impl FromStr for Backend {
     type Err = BackendError;
     fn from_str(s: &str) -> Result<Backend, BackendError> {
-        Backend::ALL
-            .into_iter()
+        Backend::every()
             .find(|b| b.name() == s.trim().to_ascii_lowercase())
             .ok_or_else(|| BackendError::Unknown {
                 name: s.to_string(),
-                all: Backend::ALL
-                    .iter()
+                all: Backend::every()
                     .map(|b| b.name())
                     .collect::<Vec<_>>()
                     .join(", "),
@@ -432,7 +472,7 @@ mod tests {
 
     #[test]
     fn names_round_trip() {
-        for b in Backend::ALL {
+        for b in Backend::every() {
             assert_eq!(b.name().parse::<Backend>().unwrap(), b);
             assert_eq!(b.to_string(), b.name());
         }
@@ -462,7 +502,7 @@ mod tests {
     #[test]
     fn native_all_matches_the_tokens() {
         // std's feature detection and pulp's tokens agree on what this CPU runs.
-        for b in Backend::ALL {
+        for b in Backend::every() {
             if b.compiled() {
                 assert_eq!(cpu_reports(b), b.is_available(), "{b}");
             }
@@ -495,7 +535,7 @@ mod tests {
 
     #[test]
     fn run_uses_the_backend_lane_count() {
-        for b in Backend::ALL {
+        for b in Backend::every() {
             match b.run(Lanes_) {
                 Ok(n) => assert_eq!(n, b.lanes()),
                 Err(e) => {

@@ -8,6 +8,8 @@
 pub mod approx;
 pub mod lanes;
 pub mod scalar;
+#[cfg(target_arch = "x86_64")]
+pub mod scalar_est;
 pub mod slices;
 pub mod vec3;
 
