@@ -134,6 +134,12 @@ struct RenderArgs {
     /// beam; the others answer packet by packet). The same image up to edge hits.
     #[arg(long, default_value = "lanes")]
     packets: coherent::render::Packets,
+    /// Keep every instance its own object under the top tree, as the scene places it (the
+    /// paper's two levels). By default the instances that never move and share a transform
+    /// are merged into one object first: a scene of thousands of static objects then builds
+    /// and traces as one tree (the image is the same up to edge hits).
+    #[arg(long)]
+    no_merge: bool,
     /// Time each stage of the packet pipeline (traversal, shadows, lights, shading, other)
     /// and print the split. The clock is read around every stage of every packet, which
     /// slows the frame; the split is for comparing stages, not for frame times.

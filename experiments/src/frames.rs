@@ -71,7 +71,8 @@ pub fn scene_specs(plan: &Plan) -> Vec<(String, String)> {
     specs
 }
 
-/// Loads the scene `spec` at the plan's resolution and samples.
+/// Loads the scene `spec` at the plan's resolution and samples, its static instances merged
+/// per transform ([`RenderScene::merge_static`], as `coherent render` renders it).
 pub fn load(plan: &Plan, spec: &str) -> Loaded {
     let mut scene = match coherent::scene::load(spec) {
         Ok(s) => s,
@@ -83,10 +84,12 @@ pub fn load(plan: &Plan, spec: &str) -> Loaded {
     }
     scene.width = plan.width;
     scene.height = plan.height;
-    match scene.validate() {
-        Ok(()) => Loaded::Scene(Box::new(scene)),
-        Err(e) => Loaded::Failed(format!("{e:#}")),
+    if let Err(e) = scene.validate() {
+        return Loaded::Failed(format!("{e:#}"));
     }
+    // As `coherent render` does by default: static instances at one transform, one object.
+    let (scene, _) = scene.merge_static();
+    Loaded::Scene(Box::new(scene))
 }
 
 /// [`load`] for an experiment that leaves out what it cannot render: the scene, or `None`
@@ -140,10 +143,22 @@ pub fn widest() -> Backend {
 
 /// The renderer of `scene` with accelerator `kind`.
 pub fn renderer(scene: &RenderScene, kind: AccelKind) -> anyhow::Result<Renderer<'_, AnyAccel>> {
+    Ok(renderer_timed(scene, kind)?.0)
+}
+
+/// [`renderer`], with the seconds the accelerator took to build (from the scene's meshes and
+/// instances, as `coherent render` times it).
+pub fn renderer_timed(
+    scene: &RenderScene,
+    kind: AccelKind,
+) -> anyhow::Result<(Renderer<'_, AnyAccel>, f64)> {
+    let start = Instant::now();
     let accel = AnyAccel::build(&scene.accel_scene(), &AnyParams::of(kind))
         .with_context(|| format!("building the {kind} accelerator for {}", scene.name))?;
-    Renderer::new(scene, accel, scene.width, scene.height)
-        .with_context(|| format!("the camera of {}", scene.name))
+    let seconds = start.elapsed().as_secs_f64();
+    let r = Renderer::new(scene, accel, scene.width, scene.height)
+        .with_context(|| format!("the camera of {}", scene.name))?;
+    Ok((r, seconds))
 }
 
 /// A rayon pool of `threads` threads.

@@ -16,6 +16,7 @@
 use std::collections::BTreeMap;
 use std::fmt::Display;
 
+use coherent::accel::Accel;
 use coherent::accel_any::AccelKind;
 use coherent::render::centres::psnr;
 use coherent::render::{LightSamples, RenderStats};
@@ -37,6 +38,7 @@ pub const EXPERIMENT: Experiment = Experiment {
     csv: &[
         FILE,
         factors::FILE,
+        BUILDS_FILE,
         BREAKDOWN_FILE,
         COHERENCE_FILE,
         LIGHT_SAMPLES_FILE,
@@ -87,6 +89,17 @@ const LIGHT_SAMPLES_HEADER: &[&str] = &[
     "speedup_vs_pixel",
     "psnr_db",
     "psnr_vs_pixel_db",
+];
+/// Each accelerator's build per scene: seconds, bytes, and the objects (instances, after the
+/// static ones are merged) and triangles it was built over.
+const BUILDS_FILE: &str = "table3_builds.csv";
+const BUILDS_HEADER: &[&str] = &[
+    "scene",
+    "accel",
+    "build_s",
+    "memory_bytes",
+    "objects",
+    "triangles",
 ];
 /// Scenes, accelerators and backends left out, and why.
 const SKIPPED_FILE: &str = "table3_skipped.csv";
@@ -185,6 +198,7 @@ pub fn run_plan(
     let mut coherence = ctx.csv(COHERENCE_FILE, COHERENCE_HEADER)?;
     let mut shared = ctx.csv(LIGHT_SAMPLES_FILE, LIGHT_SAMPLES_HEADER)?;
     let mut factor_rows = ctx.csv(factors::FILE, factors::HEADER)?;
+    let mut builds = ctx.csv(BUILDS_FILE, BUILDS_HEADER)?;
     let specs = frames::scene_specs(plan);
     let bar = ctx.progress(specs.len() as u64, "table3");
     for (name, spec) in &specs {
@@ -208,8 +222,18 @@ pub fn run_plan(
         };
         let mut renderers = Vec::new();
         for &kind in accels {
-            match frames::renderer(&scene, kind) {
-                Ok(r) => renderers.push((kind, r)),
+            match frames::renderer_timed(&scene, kind) {
+                Ok((r, build_s)) => {
+                    builds.row(&[
+                        name,
+                        &kind,
+                        &format!("{build_s:.6e}"),
+                        &r.accel().memory_bytes(),
+                        &scene.instances.len(),
+                        &scene.triangles(),
+                    ])?;
+                    renderers.push((kind, r));
+                }
                 Err(e) => {
                     let why = format!("{e:#}");
                     ctx.note(format!("table3: scene {name} with {kind} skipped: {why}"));
@@ -395,6 +419,7 @@ pub fn run_plan(
     coherence.finish()?;
     shared.finish()?;
     factor_rows.finish()?;
+    builds.finish()?;
     let mut out = ctx.csv(SKIPPED_FILE, SKIPPED_HEADER)?;
     for (item, why) in &skipped {
         out.row(&[item, why])?;
@@ -707,6 +732,18 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     }
     if let Some(f) = factors::report(ctx)? {
         md.push_str(&f);
+    }
+    if let Some(b) = ctx.read_csv(BUILDS_FILE, BUILDS_HEADER)?
+        && !b.rows.is_empty()
+    {
+        md.push_str(
+            "\nEach accelerator's build (`table3_builds.csv`: seconds, memory, and the objects \
+             it was built over once the static instances are merged per transform, as \
+             `coherent render` merges them unless told `--no-merge`):\n\n",
+        );
+        md.push_str(&b.pivot("scene", "accel", "build_s")?);
+        md.push_str("\nMemory (bytes):\n\n");
+        md.push_str(&b.pivot("scene", "accel", "memory_bytes")?);
     }
 
     let scenes = t.distinct("scene")?;

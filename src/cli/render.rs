@@ -73,6 +73,14 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     scene
         .validate()
         .with_context(|| format!("scene {}", args.scene))?;
+    let objects = scene.instances.len();
+    let merged = if args.no_merge {
+        0
+    } else {
+        let (s, report) = scene.merge_static();
+        scene = s;
+        report.merged
+    };
     let (w, h) = (scene.width, scene.height);
     let method = match (args.spp, args.accuracy, scene.spp, scene.accuracy) {
         (Some(spp), _, _, _) => Method::Uniform { spp },
@@ -173,7 +181,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .map(|k| format!("{} {:.2}", k.name(), st.kinds[*k as usize].average()))
         .collect();
     println!(
-        "{}: {}x{} {} ({} triangles), {} + {}{}, {} thread(s), {}: {:.3} s ({:.1} Mrays/s); rays: {}; \
+        "{}: {}x{} {} ({} triangles, {}), {} + {}{}, {} thread(s), {}: {:.3} s ({:.1} Mrays/s); rays: {}; \
          active lanes per packet (of {}): {}; by depth: {}; material passes per packet {:.2}; \
          build {:.3} s, {:.1} MB; load {:.3} s -> {}",
         scene.name,
@@ -181,6 +189,14 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         h,
         method.name(),
         scene.triangles(),
+        if merged > 0 {
+            format!(
+                "{objects} objects, {merged} static ones merged: {} left",
+                scene.instances.len()
+            )
+        } else {
+            format!("{objects} objects")
+        },
         backend.name(),
         kind,
         match (args.regroup, args.packets) {

@@ -9,6 +9,7 @@ pub mod file;
 #[cfg(test)]
 mod file_tests;
 pub mod gltf;
+pub mod merge;
 pub mod motion;
 pub mod shaded;
 
@@ -20,6 +21,7 @@ use crate::material::Material;
 
 pub use camera::Camera;
 pub use error::SceneError;
+pub use merge::MergeReport;
 pub use motion::{InstanceMotion, Keyframe};
 pub use shaded::ShadedMesh;
 

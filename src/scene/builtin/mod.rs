@@ -3,6 +3,7 @@
 //! Table 4).
 
 mod car;
+mod city;
 mod cornell;
 mod glass1;
 mod materials;
@@ -20,13 +21,14 @@ use crate::light::{Light, Omni};
 use crate::tonemap::Operator;
 
 pub use car::car;
+pub use city::city;
 pub use cornell::cornell;
 pub use glass1::glass1;
 pub use room2::room2;
 pub use spdemo::spdemo;
 
 /// (name, one-line description) of every built-in scene.
-pub const NAMES: [(&str, &str); 5] = [
+pub const NAMES: [(&str, &str); 6] = [
     (
         "car",
         "stand-in for the paper's Car: tabulated-BDF paint, refractive glass, 4 lights (environment, parallel, spot, goniodiagram), depth 2",
@@ -46,6 +48,10 @@ pub const NAMES: [(&str, &str); 5] = [
     (
         "cornell",
         "a Cornell-like room: coloured Phong walls, a mirror box and a glass sphere, one area light, depth 2",
+    ),
+    (
+        "city",
+        "many objects: 5,329 (a 72 x 72 grid of buildings, lamp posts, the ground), each its own mesh, 63,938 triangles, sun and 4 street lamps, depth 1",
     ),
 ];
 
@@ -102,6 +108,7 @@ pub fn by_name(name: &str) -> Option<RenderScene> {
         "glass1" => Some(glass1()),
         "room2" => Some(room2()),
         "cornell" => Some(cornell()),
+        "city" => Some(city()),
         _ => None,
     }
 }
@@ -281,6 +288,7 @@ mod tests {
             ("glass1", 0.9),
             ("room2", 1.0),
             ("cornell", 0.6),
+            ("city", 0.6),
         ] {
             let s = by_name(name).unwrap();
             let accel = coherent_bsp::Bsp::build(&s.accel_scene(), &Default::default()).unwrap();
