@@ -27,7 +27,7 @@ use crate::ctx::Ctx;
 use crate::frames::{self, Plan};
 use crate::plot::BarChart;
 use crate::table::{Table, fmt_num, markdown_table};
-use crate::table3::{PAPER, find};
+use crate::table3::{PAPER, ROUNDS, find};
 use crate::timing::{median, speedup};
 
 pub(crate) const FILE: &str = "table3_factors.csv";
@@ -107,7 +107,6 @@ pub(crate) fn measure(
     backends: &[Backend],
     plan: &Plan,
     reference: &[[f32; 3]],
-    rounds: usize,
 ) -> anyhow::Result<()> {
     let embree = renderers.iter().position(|(k, _)| *k == AccelKind::Embree);
     let configs = configs(&simd_backends(backends), embree);
@@ -119,7 +118,7 @@ pub(crate) fn measure(
         psnrs.push(psnr(&rendered.displayed(Backend::Scalar)?, reference, 1.0));
     }
     let mut seconds = vec![Vec::new(); configs.len()];
-    for _ in 0..rounds {
+    for _ in 0..ROUNDS {
         for (i, &c) in configs.iter().enumerate() {
             let r = &mut renderers[c.accel].1;
             r.packets = c.packets;
@@ -192,7 +191,10 @@ struct Factors {
 }
 
 fn factors(t: &Table, scene: &str, backend: &str) -> anyhow::Result<Factors> {
-    let est = match find(t, &[("scene", scene), ("backend", backend), ("accel", "bsp")])? {
+    let est = match find(
+        t,
+        &[("scene", scene), ("backend", backend), ("accel", "bsp")],
+    )? {
         Some(r) => t.get(r, "arithmetic")?.to_owned(),
         None => "estimate".to_owned(),
     };
@@ -206,7 +208,11 @@ fn factors(t: &Table, scene: &str, backend: &str) -> anyhow::Result<Factors> {
     let ratio = |a: Option<f64>, b: Option<f64>| Some(speedup(a?, b?));
     // The lanes factor compares arithmetic alike: over scalar-est for an estimating backend,
     // over exact scalar for an exact one (pulp).
-    let lanes_base = if est == "estimate" { scalar_est } else { scalar };
+    let lanes_base = if est == "estimate" {
+        scalar_est
+    } else {
+        scalar
+    };
     Ok(Factors {
         arithmetic: ratio(scalar, scalar_est),
         culling: ratio(scalar, scalar_beam),
@@ -365,7 +371,10 @@ mod tests {
         assert_eq!(c[0].backend, Backend::Scalar);
         assert_eq!(c[0].packets, Packets::Lanes);
         assert_eq!(c[0].accel, 0);
-        assert!(c.iter().any(|c| c.packets == Packets::Beam && c.backend == Backend::Scalar));
+        assert!(
+            c.iter()
+                .any(|c| c.packets == Packets::Beam && c.backend == Backend::Scalar)
+        );
         assert_eq!(c.last().unwrap().accel, 2);
         assert_eq!(
             c.iter().any(|c| c.backend == Backend::ScalarEst),

@@ -27,12 +27,12 @@ pub use timing::{Timing, speedup};
 // The experiments, one module each.
 pub mod aa;
 pub mod accel;
+mod factors;
 pub mod kernels;
 pub mod regroup;
 pub mod table1;
 pub mod table2;
 pub mod table3;
-mod factors;
 pub mod table4;
 pub mod table5;
 

@@ -23,8 +23,8 @@ use coherent::render::{LightSamples, RenderStats};
 use coherent::simd::Backend;
 
 use crate::ctx::Ctx;
-use crate::factors;
 use crate::experiment::{Experiment, Status};
+use crate::factors;
 use crate::frames::{self, Loaded, Plan};
 use crate::plot::{BarChart, LineChart, Series};
 use crate::table::{PaperTable, Table, fmt_num, markdown_table};
@@ -150,6 +150,9 @@ pub(crate) const PAPER: PaperTable = PaperTable {
     ],
 };
 
+/// Timed rounds per frame configuration (`seconds` is their median).
+pub(crate) const ROUNDS: usize = 3;
+
 /// Speedup targets over scalar by lane count (`4 -> 4x`, `8 -> 6x`, `16 -> 8x`).
 const TARGETS: &[(usize, f64)] = &[(4, 4.0), (8, 6.0), (16, 8.0)];
 /// Every image within this PSNR of the scalar + BSP one.
@@ -191,7 +194,7 @@ pub fn run_plan(
     for (item, why) in &skipped {
         ctx.note(format!("table3: {item} skipped: {why}"));
     }
-    let rounds = 3;
+    let rounds = ROUNDS;
     let pool = frames::pool(1)?;
     let mut csv = ctx.csv(FILE, HEADER)?;
     let mut breakdown = ctx.csv(BREAKDOWN_FILE, BREAKDOWN_HEADER)?;
@@ -309,7 +312,6 @@ pub fn run_plan(
             backends,
             plan,
             reference.as_ref().expect("the scalar + BSP image"),
-            rounds,
         )?;
         // Coherence by depth, once per packet width (the BSP's frames).
         let mut widths = Vec::new();

@@ -35,11 +35,7 @@ type Key = ([u32; 12], bool, bool);
 
 fn key(t: &Affine3A, m: &ShadedMesh) -> Key {
     let cols = t.to_cols_array();
-    (
-        cols.map(f32::to_bits),
-        m.normals.is_some(),
-        m.uvs.is_some(),
-    )
+    (cols.map(f32::to_bits), m.normals.is_some(), m.uvs.is_some())
 }
 
 impl RenderScene {

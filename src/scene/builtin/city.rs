@@ -74,12 +74,19 @@ pub fn city() -> RenderScene {
             let z0 = -half + j as f32 * BLOCK + 0.5 * STREET;
             let lot = BLOCK - STREET;
             // Towers cluster near the centre; the outskirts stay low.
-            let (ci, cj) = (i as f32 - 0.5 * BLOCKS as f32, j as f32 - 0.5 * BLOCKS as f32);
+            let (ci, cj) = (
+                i as f32 - 0.5 * BLOCKS as f32,
+                j as f32 - 0.5 * BLOCKS as f32,
+            );
             let centre = (-(ci * ci + cj * cj) / 300.0).exp();
             let height = 6.0 + rng.next() * 18.0 + centre * rng.next() * 110.0;
             let inset = |r: &mut Rng| 0.5 + r.next() * 2.5;
             let lo = Vec3::new(x0 + inset(&mut rng), 0.0, z0 + inset(&mut rng));
-            let hi = Vec3::new(x0 + lot - inset(&mut rng), height, z0 + lot - inset(&mut rng));
+            let hi = Vec3::new(
+                x0 + lot - inset(&mut rng),
+                height,
+                z0 + lot - inset(&mut rng),
+            );
             let tower = height > 60.0;
             let material = if tower {
                 glass
