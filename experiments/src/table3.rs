@@ -17,7 +17,8 @@ use std::collections::BTreeMap;
 use std::fmt::Display;
 
 use coherent::accel::Accel;
-use coherent::accel_any::AccelKind;
+use coherent::accel_any::{AccelKind, AnyAccel, AnyParams};
+use coherent::bsp::BuildPreset;
 use coherent::render::centres::psnr;
 use coherent::render::{LightSamples, RenderStats};
 use coherent::simd::Backend;
@@ -90,16 +91,21 @@ const LIGHT_SAMPLES_HEADER: &[&str] = &[
     "psnr_db",
     "psnr_vs_pixel_db",
 ];
-/// Each accelerator's build per scene: seconds, bytes, and the objects (instances, after the
-/// static ones are merged) and triangles it was built over.
+/// Each accelerator's build per scene (the BSP with both presets): seconds, bytes, the objects
+/// (instances, after the static ones are merged) and triangles it was built over, and the
+/// BSP's tree sizes.
 const BUILDS_FILE: &str = "table3_builds.csv";
 const BUILDS_HEADER: &[&str] = &[
     "scene",
     "accel",
+    "preset",
     "build_s",
     "memory_bytes",
     "objects",
     "triangles",
+    "nodes",
+    "leaf_refs",
+    "max_depth",
 ];
 /// Scenes, accelerators and backends left out, and why.
 const SKIPPED_FILE: &str = "table3_skipped.csv";
@@ -227,14 +233,17 @@ pub fn run_plan(
         for &kind in accels {
             match frames::renderer_timed(&scene, kind) {
                 Ok((r, build_s)) => {
-                    builds.row(&[
-                        name,
-                        &kind,
-                        &format!("{build_s:.6e}"),
-                        &r.accel().memory_bytes(),
-                        &scene.instances.len(),
-                        &scene.triangles(),
-                    ])?;
+                    build_row(&mut builds, name, &scene, r.accel(), build_s)?;
+                    if kind == AccelKind::Bsp {
+                        // The other preset, for the builds table only (the frames use the
+                        // default one, as `coherent render` does).
+                        let mut params = AnyParams::of(kind);
+                        params.bsp.object.build = BuildPreset::Fast;
+                        let start = std::time::Instant::now();
+                        let fast = AnyAccel::build(&scene.accel_scene(), &params)?;
+                        let fast_s = start.elapsed().as_secs_f64();
+                        build_row(&mut builds, name, &scene, &fast, fast_s)?;
+                    }
                     renderers.push((kind, r));
                 }
                 Err(e) => {
@@ -428,6 +437,52 @@ pub fn run_plan(
     }
     out.finish()?;
     Ok(())
+}
+
+/// A row of the builds table: the accelerator `a` of `scene`, built in `seconds`; for the BSP,
+/// its object trees' preset, nodes, leaf references and depth (summed and deepest over the
+/// object trees and the top tree).
+fn build_row(
+    out: &mut crate::table::CsvOut,
+    name: &str,
+    scene: &coherent::scene::RenderScene,
+    a: &AnyAccel,
+    seconds: f64,
+) -> anyhow::Result<()> {
+    let (preset, nodes, refs, depth) = match a {
+        AnyAccel::Bsp(b) => {
+            let trees = b.mesh_trees().iter().map(|m| &m.tree).chain([b.top_tree()]);
+            let (mut nodes, mut refs, mut depth) = (0, 0, 0);
+            for t in trees {
+                nodes += t.stats.nodes;
+                refs += t.stats.leaf_refs;
+                depth = depth.max(t.stats.max_depth);
+            }
+            let preset = match b.params().object.build {
+                BuildPreset::Exact => "exact",
+                BuildPreset::Fast => "fast",
+            };
+            (
+                preset,
+                nodes.to_string(),
+                refs.to_string(),
+                depth.to_string(),
+            )
+        }
+        _ => ("default", String::new(), String::new(), String::new()),
+    };
+    out.row(&[
+        &name,
+        &a.kind(),
+        &preset,
+        &format!("{seconds:.6e}"),
+        &a.memory_bytes(),
+        &scene.instances.len(),
+        &scene.triangles(),
+        &nodes,
+        &refs,
+        &depth,
+    ])
 }
 
 /// The row of `t` with these key cells.
@@ -739,13 +794,13 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
         && !b.rows.is_empty()
     {
         md.push_str(
-            "\nEach accelerator's build (`table3_builds.csv`: seconds, memory, and the objects \
-             it was built over once the static instances are merged per transform, as \
-             `coherent render` merges them unless told `--no-merge`):\n\n",
+            "\nEach accelerator's build, the BSP's with both presets (`table3_builds.csv`: \
+             seconds, bytes, the objects it was built over once the static instances are merged \
+             per transform, as `coherent render` merges them unless told `--no-merge`, and the \
+             BSP's nodes, leaf references and depth over all its trees; the frames above use \
+             the `exact` preset):\n\n",
         );
-        md.push_str(&b.pivot("scene", "accel", "build_s")?);
-        md.push_str("\nMemory (bytes):\n\n");
-        md.push_str(&b.pivot("scene", "accel", "memory_bytes")?);
+        md.push_str(&b.to_markdown());
     }
 
     let scenes = t.distinct("scene")?;
@@ -1176,6 +1231,23 @@ intensity = [10, 10, 10]
             "{:?}",
             t.rows[r]
         );
+        // The BSP's build with both presets, per scene that rendered.
+        let builds = ctx.read_csv(BUILDS_FILE, BUILDS_HEADER).unwrap().unwrap();
+        let presets: Vec<&str> = builds
+            .rows_where("scene", "ball")
+            .unwrap()
+            .iter()
+            .map(|&r| builds.get(r, "preset").unwrap())
+            .collect();
+        assert_eq!(presets, ["exact", "fast"]);
+        // The factor table starts with the exact scalar reference.
+        let f = ctx
+            .read_csv(factors::FILE, factors::HEADER)
+            .unwrap()
+            .unwrap();
+        let r = find(&f, &[("scene", "ball")]).unwrap().unwrap();
+        assert_eq!(f.get(r, "arithmetic").unwrap(), "exact");
+        assert_eq!(f.f64(r, "speedup_vs_scalar").unwrap(), 1.0);
         let sk = ctx.read_csv(SKIPPED_FILE, SKIPPED_HEADER).unwrap().unwrap();
         assert_eq!(sk.rows.len(), 1);
         assert_eq!(sk.get(0, "item").unwrap(), "scene broken");
