@@ -27,7 +27,7 @@ use crate::ctx::Ctx;
 use crate::frames::{self, Plan};
 use crate::plot::BarChart;
 use crate::table::{Table, fmt_num, markdown_table};
-use crate::table3::{PAPER, ROUNDS, find};
+use crate::table3::{ROUNDS, find, paper_speedup};
 use crate::timing::{median, speedup};
 
 pub(crate) const FILE: &str = "table3_factors.csv";
@@ -278,13 +278,7 @@ pub(crate) fn plot(ctx: &Ctx) -> anyhow::Result<()> {
         "paper SSE".to_owned(),
         scenes
             .iter()
-            .map(|s| {
-                PAPER
-                    .rows
-                    .iter()
-                    .find(|(k, _)| k == s)
-                    .map_or(f64::NAN, |(_, v)| v[2])
-            })
+            .map(|s| paper_speedup(s).unwrap_or(f64::NAN))
             .collect(),
     ));
     ctx.bar_chart(
@@ -321,11 +315,7 @@ pub(crate) fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     );
     let mut rows = Vec::new();
     for s in t.distinct("scene")? {
-        let paper = PAPER
-            .rows
-            .iter()
-            .find(|(k, _)| *k == s)
-            .map_or("—".to_owned(), |(_, v)| format!("{}x", fmt_num(v[2])));
+        let paper = paper_speedup(&s).map_or("—".to_owned(), |v| format!("{}x", fmt_num(v)));
         for b in simd_in(&t)? {
             let f = factors(&t, &s, &b)?;
             rows.push(vec![

@@ -159,6 +159,15 @@ pub(crate) const PAPER: PaperTable = PaperTable {
 /// Timed rounds per frame configuration (`seconds` is their median).
 pub(crate) const ROUNDS: usize = 3;
 
+/// The paper's SSE speedup for our stand-in `scene`, if the paper has the scene.
+pub(crate) fn paper_speedup(scene: &str) -> Option<f64> {
+    PAPER
+        .rows
+        .iter()
+        .find(|(k, _)| *k == scene)
+        .map(|(_, v)| v[2])
+}
+
 /// Speedup targets over scalar by lane count (`4 -> 4x`, `8 -> 6x`, `16 -> 8x`).
 const TARGETS: &[(usize, f64)] = &[(4, 4.0), (8, 6.0), (16, 8.0)];
 /// Every image within this PSNR of the scalar + BSP one.
@@ -521,13 +530,7 @@ fn plots(ctx: &Ctx) -> anyhow::Result<()> {
             "paper SSE".to_owned(),
             scenes
                 .iter()
-                .map(|s| {
-                    PAPER
-                        .rows
-                        .iter()
-                        .find(|(k, _)| k == s)
-                        .map_or(f64::NAN, |(_, v)| v[2])
-                })
+                .map(|s| paper_speedup(s).unwrap_or(f64::NAN))
                 .collect(),
         ));
         ctx.bar_chart(
