@@ -77,6 +77,22 @@ fn a_built_in_scene_renders_to_png_and_exr_with_a_summary() {
 }
 
 #[test]
+fn every_backend_that_runs_here_renders_a_frame() {
+    // scalar-est included: the renderer's kernels are the ones that opt in to it.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cornell.png");
+    for b in coherent::simd::Backend::every() {
+        let out = render_cornell(&path, &["--backend", b.name()]);
+        if b.is_available() {
+            assert!(out.status.success(), "{b}: {}", text(&out));
+        } else {
+            assert!(!out.status.success(), "{b} is unavailable but rendered");
+            assert!(text(&out).contains(b.name()), "{}", text(&out));
+        }
+    }
+}
+
+#[test]
 fn stages_prints_the_time_of_each_pipeline_stage() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("cornell.exr");

@@ -337,6 +337,7 @@ struct ImageKernel<'a> {
 
 impl coherent_simd::Kernel for ImageKernel<'_> {
     type Output = ();
+    const SCALAR_EST: bool = true;
     #[inline(always)]
     fn run<L: Lanes>(self, l: L) {
         let mut r = [0.0f32; coherent_simd::MAX_LANES];
@@ -408,6 +409,7 @@ struct PlanarKernel<'a> {
 
 impl coherent_simd::Kernel for PlanarKernel<'_> {
     type Output = ();
+    const SCALAR_EST: bool = true;
     #[inline(always)]
     fn run<L: Lanes>(self, l: L) {
         let n = self.px.r.len();

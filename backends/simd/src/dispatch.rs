@@ -45,6 +45,11 @@ pub enum Backend {
 /// compiled without AVX.
 pub trait Kernel {
     type Output;
+    /// Whether [`Backend::ScalarEst`] runs this kernel. It exists for the factor table's
+    /// frames (and the tests that stamp it), not for every workload: each kernel that opts in
+    /// is compiled once more, and the build of every kernel on every backend is most of the
+    /// workspace's compile time. Elsewhere `run` says the backend cannot run it.
+    const SCALAR_EST: bool = false;
     fn run<L: Lanes>(self, l: L) -> Self::Output;
 }
 
@@ -318,7 +323,23 @@ impl Backend {
         match self {
             Backend::Scalar => Ok(run_on(k, crate::scalar::Scalar)),
             #[cfg(target_arch = "x86_64")]
-            Backend::ScalarEst => Ok(run_on(k, crate::scalar_est::ScalarEst)),
+            Backend::ScalarEst => {
+                // A constant condition: the collector drops the arm a kernel does not opt in
+                // to, so its scalar-est copy is never compiled.
+                if K::SCALAR_EST {
+                    Ok(run_on(k, crate::scalar_est::ScalarEst))
+                } else {
+                    Err(BackendError::Unavailable {
+                        backend: self,
+                        reason: format!(
+                            "`{}` runs only the renderer's frames, tone mapping and the lane \
+                             tests (the factor table's workload)",
+                            self.name()
+                        ),
+                        available: Backend::available_list(),
+                    })
+                }
+            }
             #[cfg(all(feature = "sse", target_arch = "x86_64"))]
             Backend::Sse => Ok(run_on(k, crate::sse::Sse)),
             #[cfg(feature = "wide")]
@@ -528,8 +549,24 @@ mod tests {
     struct Lanes_;
     impl Kernel for Lanes_ {
         type Output = usize;
+        const SCALAR_EST: bool = true;
         fn run<L: Lanes>(self, _l: L) -> usize {
             L::N
+        }
+    }
+
+    struct NotOptedIn;
+    impl Kernel for NotOptedIn {
+        type Output = ();
+        fn run<L: Lanes>(self, _l: L) {}
+    }
+
+    #[test]
+    fn scalar_est_runs_only_the_kernels_that_opt_in() {
+        if Backend::ScalarEst.is_available() {
+            assert_eq!(Backend::ScalarEst.run(Lanes_), Ok(1));
+            let e = Backend::ScalarEst.run(NotOptedIn).unwrap_err();
+            assert!(e.to_string().contains("scalar-est"), "{e}");
         }
     }
 
