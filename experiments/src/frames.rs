@@ -136,6 +136,11 @@ pub fn backends() -> (Vec<Backend>, Vec<(String, String)>) {
     (Backend::available(), skipped)
 }
 
+/// Whether a results file's backend `name` is one of [`Backend::hand_written`].
+pub fn is_hand_written(name: &str) -> bool {
+    Backend::hand_written().any(|b| b.name() == name)
+}
+
 /// The widest hand-written backend usable here (the one `coherent render` picks by default).
 pub fn widest() -> Backend {
     Backend::widest()

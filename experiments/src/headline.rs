@@ -7,6 +7,7 @@ use crate::experiment::Experiment;
 use crate::table::{PaperTable, Table, fmt_num, markdown_table};
 use crate::{table1, table2, table3, table4, table5};
 use coherent::machine::Machine;
+use coherent::simd::Backend;
 
 /// The plots of the first screen, one per slot: the first stem of each slot whose PNG exists.
 pub const PLOTS: &[&[(&str, &str)]] = &[
@@ -254,12 +255,13 @@ fn range(values: impl Iterator<Item = f64>, unit: &str) -> Option<String> {
     })
 }
 
-/// The family of a lane backend: `wide4` -> `wide`, `pulp16` -> `pulp`, others themselves.
+/// The family of a lane backend named in a results file ([`Backend::family`]); a name this
+/// build does not know is its own family.
 fn family(backend: &str) -> &str {
-    ["wide", "pulp"]
-        .into_iter()
-        .find(|f| backend.starts_with(f))
-        .unwrap_or(backend)
+    match Backend::named(backend) {
+        Some(b) => b.family(),
+        None => backend,
+    }
 }
 
 /// The order of the families in a cell; others follow in order of appearance.

@@ -26,6 +26,7 @@ use coherent::tonemap::{self, Adaptation, Display, Operator, ToneMap};
 
 use crate::ctx::Ctx;
 use crate::experiment::{Experiment, Status};
+use crate::frames::is_hand_written;
 use crate::plot::{BarChart, LineChart, Series};
 use crate::table::{fmt_num, markdown_table};
 use crate::timing::{median, speedup};
@@ -565,10 +566,6 @@ fn max_error(f: Approx, a: &[f32], b: &[f32], got: &[f32]) -> (f64, f64, &'stati
     (worst, bound, kind)
 }
 
-/// The backends of the speedup-vs-lanes plot: the hand-written or run-time dispatched one at
-/// each width (the bar chart shows every backend, `wide` included).
-const NATIVE: &[&str] = &["scalar", "sse", "avx2", "avx512"];
-
 fn plots(ctx: &Ctx) -> anyhow::Result<()> {
     let Some(t) = ctx.read_csv("kernels.csv", HEADER)? else {
         return Ok(());
@@ -577,7 +574,8 @@ fn plots(ctx: &Ctx) -> anyhow::Result<()> {
     for kernel in t.distinct("kernel")? {
         let mut pts = Vec::new();
         for r in t.rows_where("kernel", &kernel)? {
-            if NATIVE.contains(&t.get(r, "backend")?) {
+            // The hand-written backends only (the bar chart shows every backend).
+            if is_hand_written(t.get(r, "backend")?) {
                 pts.push((t.f64(r, "lanes")?, t.f64(r, "speedup")?));
             }
         }

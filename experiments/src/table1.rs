@@ -28,6 +28,7 @@ use coherent::simd::{Backend, Kernel, Lanes, SimdI32, Vec3s};
 
 use crate::ctx::Ctx;
 use crate::experiment::{Experiment, Status};
+use crate::frames::is_hand_written;
 use crate::plot::{BarChart, LineChart, Series};
 use crate::table::{PaperTable, fmt_num, markdown_table};
 use crate::timing::{median, speedup};
@@ -72,10 +73,6 @@ pub(crate) const PAPER: PaperTable = PaperTable {
         ("400000", &[0.495, 0.156, 3.17]),
     ],
 };
-
-/// The backends of the speedup-vs-lanes plot: the hand-written or run-time dispatched one
-/// at each width (the bar chart shows every backend, `wide` included).
-const NATIVE: &[&str] = &["scalar", "sse", "avx2", "avx512"];
 
 /// The project's targets for the speedup over scalar: `(lanes, target)`.
 const TARGETS: &[(usize, f64)] = &[(4, 3.2), (8, 6.0), (16, 10.0)];
@@ -278,7 +275,8 @@ fn plots(ctx: &Ctx) -> anyhow::Result<()> {
     for c in t.distinct("calls")? {
         let mut pts = Vec::new();
         for r in t.rows_where("calls", &c)? {
-            if NATIVE.contains(&t.get(r, "backend")?) {
+            // The hand-written backends only (the bar chart shows every backend).
+            if is_hand_written(t.get(r, "backend")?) {
                 pts.push((t.f64(r, "lanes")?, t.f64(r, "speedup")?));
             }
         }

@@ -33,6 +33,7 @@ use glam::Vec3;
 
 use crate::ctx::Ctx;
 use crate::experiment::{Experiment, Status};
+use crate::frames::is_hand_written;
 use crate::plot::{BarChart, LineChart, Series};
 use crate::table::{PaperTable, fmt_num, markdown_table};
 use crate::targets::{Check, condensed};
@@ -87,9 +88,6 @@ pub(crate) const PAPER: PaperTable = PaperTable {
 
 /// Targets for the speedup over scalar, lighting only: `(lanes, target)`.
 const TARGETS: &[(usize, f64)] = &[(4, 3.5), (8, 6.0), (16, 10.0)];
-
-/// The backends of the speedup-vs-lanes plot.
-const NATIVE: &[&str] = &["scalar", "sse", "avx2", "avx512"];
 
 /// Height of the lights above the ground.
 const H: f32 = 3.0;
@@ -538,13 +536,9 @@ fn plots(ctx: &Ctx) -> anyhow::Result<()> {
     for light in &lights {
         for shadows in ["0", "1"] {
             let mut pts = Vec::new();
-            for b in NATIVE {
-                if let Some(s) = find(light, b, shadows)? {
-                    let lanes = Backend::ALL
-                        .iter()
-                        .find(|x| x.name() == *b)
-                        .map_or(1, |x| x.lanes());
-                    pts.push((lanes as f64, s));
+            for b in Backend::hand_written() {
+                if let Some(s) = find(light, b.name(), shadows)? {
+                    pts.push((b.lanes() as f64, s));
                 }
             }
             if shadows == "0" {
@@ -654,7 +648,7 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
             for b in &backends {
                 if let Some(r) = row_of(&light, b, "0")?
                     && t.f64(r, "lanes")? as usize == lanes
-                    && NATIVE.contains(&b.as_str())
+                    && is_hand_written(b)
                 {
                     let s = t.f64(r, "speedup")?;
                     checks.push(Check::at_least(

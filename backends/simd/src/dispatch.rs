@@ -189,6 +189,32 @@ impl Backend {
         }
     }
 
+    /// The family the reports group the backend in: `wide` for wide4/8/16, `pulp` for
+    /// pulp4/8/16, the backend itself for the hand-written ones.
+    pub fn family(self) -> &'static str {
+        match self {
+            Backend::Wide4 | Backend::Wide8 | Backend::Wide16 => "wide",
+            Backend::Pulp4 | Backend::Pulp8 | Backend::Pulp16 => "pulp",
+            b => b.name(),
+        }
+    }
+
+    /// The swept backends written by hand per instruction set, as the paper's were (scalar,
+    /// sse, avx2, avx512): the lines of the reports' speedup-versus-lanes plots.
+    pub fn hand_written() -> impl Iterator<Item = Backend> {
+        Backend::ALL.into_iter().filter(|b| {
+            matches!(
+                b,
+                Backend::Scalar | Backend::Sse | Backend::Avx2 | Backend::Avx512
+            )
+        })
+    }
+
+    /// The backend named `name` (any of [`Backend::every`]), if there is one.
+    pub fn named(name: &str) -> Option<Backend> {
+        Backend::every().find(|b| b.name() == name)
+    }
+
     /// The cargo feature that compiles the backend in (`scalar` has none).
     pub fn feature(self) -> &'static str {
         match self {
@@ -568,6 +594,19 @@ mod tests {
             let e = Backend::ScalarEst.run(NotOptedIn).unwrap_err();
             assert!(e.to_string().contains("scalar-est"), "{e}");
         }
+    }
+
+    #[test]
+    fn names_families_and_the_hand_written_ones() {
+        for b in Backend::every() {
+            assert_eq!(Backend::named(b.name()), Some(b));
+            assert!(b.name().starts_with(b.family()), "{b}");
+        }
+        assert_eq!(Backend::named("avx1024"), None);
+        assert_eq!(Backend::Wide8.family(), "wide");
+        assert_eq!(Backend::Pulp4.family(), "pulp");
+        let hand: Vec<&str> = Backend::hand_written().map(Backend::name).collect();
+        assert_eq!(hand, ["scalar", "sse", "avx2", "avx512"]);
     }
 
     #[test]
