@@ -16,6 +16,38 @@
 //!   below a threshold of active lanes ([`BspParams::single_ray_threshold`]). Single rays
 //!   may test a leaf's triangles four at a time ([`BspParams::simd_leaves`], [`Leaves4`]),
 //!   on leaves priced per four triangles ([`SahParams::leaf_group`]).
+//!
+//! Built and queried through [`coherent_accel::Accel`], like every accelerator:
+//!
+//! ```
+//! use coherent_accel::{Accel, Mesh, Ray1, Rays, Scene};
+//! use coherent_bsp::{Bsp, BspParams};
+//! use coherent_simd::{Lanes, scalar::Scalar};
+//! use glam::Vec3;
+//!
+//! // A square at z = 0, two triangles.
+//! let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+//! let square = Mesh::new(
+//!     "square",
+//!     corners.map(|(x, y)| Vec3::new(x, y, 0.0)).to_vec(),
+//!     vec![[0, 1, 2], [0, 2, 3]],
+//! );
+//! let bsp = Bsp::build(&Scene::single(square), &BspParams::default())?;
+//!
+//! // One ray at a time: the first hit, and whether anything is in the way.
+//! let down = Ray1::new(Vec3::new(0.5, 0.2, 3.0), -Vec3::Z, 0.0, f32::INFINITY);
+//! let hit = bsp.intersect1(&down).expect("the ray meets the square");
+//! assert!((hit.t - 3.0).abs() < 1e-5);
+//! assert!(bsp.occluded1(&down));
+//!
+//! // A packet of rays under a mask of active lanes, on any lane backend (here the scalar
+//! // one's single lane; `coherent_simd::Backend::run` picks one at run time).
+//! let l = Scalar;
+//! let rays = Rays::from_fn(l, |_| down);
+//! let hits = bsp.intersect(l, &rays, l.splat_mask(true));
+//! assert_eq!(hits.lane(0), Some(hit));
+//! # Ok::<(), coherent_accel::AccelError>(())
+//! ```
 
 mod beam;
 mod bsp;
