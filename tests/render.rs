@@ -1,7 +1,8 @@
 //! The packet renderer against closed forms (paper section 7's renderer, sections 3-5 as its
 //! stages): a Lambertian plane under an omni light per pixel, a mirror reflecting a known
 //! pattern, a glass slab shifting rays by Snell's law, total internal reflection past the
-//! critical angle; and the same image on every lane backend and accelerator.
+//! critical angle; a million small objects, each where it should be; and the same image on
+//! every lane backend and accelerator.
 //! Small images: the whole file runs in seconds.
 
 use coherent::accel::{Accel, AccelError};
@@ -141,6 +142,86 @@ fn lambertian_plane_under_an_omni_light_matches_the_closed_form() {
                 );
             }
         }
+    }
+}
+
+/// A million objects (a small triangle each, every one at its own place on a 1000 x 1000 grid,
+/// so none merge) seen from above: every pixel shows the object its ray meets in closed form,
+/// or the background, and the process stays within 2 GB.
+#[test]
+fn a_million_tiny_objects_render_where_they_are() {
+    const SIDE: usize = 1000;
+    let tri = [
+        Vec3::new(-0.3, -0.3, 0.0),
+        Vec3::new(0.3, -0.3, 0.0),
+        Vec3::new(0.0, 0.3, 0.0),
+    ];
+    let mesh = ShadedMesh::flat(Mesh::new("tiny", tri.to_vec(), vec![[0, 1, 2]]), 0);
+    let camera = Camera {
+        position: Vec3::new(500.0, 500.0, 800.0),
+        look_at: Vec3::new(500.0, 500.0, 0.0),
+        up: Vec3::Y,
+        vfov_deg: 60.0,
+    };
+    let colour = [0.25, 0.5, 0.75];
+    let mut s = scene(
+        vec![mesh],
+        vec![emissive("tiny", colour)],
+        vec![],
+        camera,
+        1,
+    );
+    s.instances = (0..SIDE * SIDE)
+        .map(|i| {
+            let at = Vec3::new((i % SIDE) as f32, (i / SIDE) as f32, 0.0);
+            Instance::new(0, glam::Affine3A::from_translation(at))
+        })
+        .collect();
+    s.validate().unwrap();
+    let (s, _) = s.merge_static();
+    assert_eq!(s.instances.len(), SIDE * SIDE);
+    let img = scalar_bsp(&s);
+    // The closed form: where the ray meets z = 0, inside the nearest grid point's triangle?
+    // Pixels within 1e-3 of a triangle's edge are left out.
+    let inside = |p: DVec3| -> Option<bool> {
+        let (gx, gy) = (p.x.round(), p.y.round());
+        if !(0.0..SIDE as f64).contains(&gx) || !(0.0..SIDE as f64).contains(&gy) {
+            return Some(false);
+        }
+        let (x, y) = (p.x - gx, p.y - gy);
+        // Signed distances to the edges, positive inside: the bottom y = -0.3, the left side
+        // y = 2x + 0.3 and the right side y = -2x + 0.3.
+        let s5 = 5f64.sqrt();
+        let d = [y + 0.3, (2.0 * x - y + 0.3) / s5, (-2.0 * x - y + 0.3) / s5];
+        let nearest = d.iter().map(|e| e.abs()).fold(f64::MAX, f64::min);
+        (nearest > 1e-3).then(|| d.iter().all(|&e| e > 0.0))
+    };
+    let (mut on, mut off) = (0, 0);
+    for y in 0..H {
+        for x in 0..W {
+            let d = pixel_dir(&s.camera, x, y);
+            let o = s.camera.position.as_dvec3();
+            let p = o + d * (-o.z / d.z);
+            let Some(hit) = inside(p) else { continue };
+            let got = img[(y * W + x) as usize];
+            let want = if hit { colour } else { [0.0; 3] };
+            for c in 0..3 {
+                assert!(
+                    (got[c] - want[c]).abs() < 1e-4,
+                    "pixel ({x}, {y}) at {p}: {got:?}, want {want:?}"
+                );
+            }
+            if hit { on += 1 } else { off += 1 }
+        }
+    }
+    assert!(on > 10 && off > 10, "{on} pixels on objects, {off} between");
+    if let Ok(status) = std::fs::read_to_string("/proc/self/status")
+        && let Some(kb) = status
+            .lines()
+            .find_map(|l| l.strip_prefix("VmHWM:"))
+            .and_then(|v| v.split_whitespace().next()?.parse::<u64>().ok())
+    {
+        assert!(kb * 1024 < 2 << 30, "peak resident memory {kb} kB");
     }
 }
 

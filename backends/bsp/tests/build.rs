@@ -1,11 +1,13 @@
 //! The object-tree builds of the two-level BSP (paper section 3) as trees: the fast build
 //! (binned SAH, Hunt et al. 2006 / Shevtsov et al. 2007) is the same tree on 1 and 2 threads,
 //! and both builds keep a fan of long thin triangles through one point (Wald & Havran 2006's
-//! perfect splits multiply its references) within the reference budget.
+//! perfect splits multiply its references) within the reference budget; a scene of a million
+//! objects builds and answers within 2 GB.
 
 use coherent_accel::shapes::{Rng, soup, terrain};
-use coherent_bsp::{BuildPreset, KdTree, MeshTree, PARALLEL_MIN, SahParams};
-use glam::Vec3;
+use coherent_accel::{Accel, Instance, Mesh, Ray1, Scene};
+use coherent_bsp::{Bsp, BspParams, BuildPreset, KdTree, MeshTree, PARALLEL_MIN, SahParams};
+use glam::{Affine3A, Vec3};
 
 fn fast() -> SahParams {
     SahParams::default().with_build(BuildPreset::Fast)
@@ -112,5 +114,63 @@ fn fan_through_one_point_stays_within_the_reference_budget() {
             assert!(secs < 60.0, "{build:?} {refs}: {secs} s");
             eprintln!("fan {build:?} refs {refs}: {:?} in {secs:.2} s", t.stats);
         }
+    }
+}
+
+/// The process's peak resident memory (Linux's `VmHWM`), in bytes, where the system says.
+fn peak_rss_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// A million objects, each a small triangle at its own place on a 1000 x 1000 grid (no two at
+/// one transform, so nothing merges): the top tree over a million boxes builds within 2 GB
+/// (the structure's bytes, and the whole process's peak), and rays find the right object.
+#[test]
+fn a_million_tiny_objects_build_and_answer_within_2_gb() {
+    const SIDE: usize = 1000;
+    const LIMIT: u64 = 2 << 30;
+    let tiny = Mesh::new(
+        "tiny",
+        vec![
+            Vec3::new(-0.3, -0.3, 0.0),
+            Vec3::new(0.3, -0.3, 0.0),
+            Vec3::new(0.0, 0.3, 0.0),
+        ],
+        vec![[0, 1, 2]],
+    );
+    let at = |i: usize| Vec3::new((i % SIDE) as f32, (i / SIDE) as f32, 0.0);
+    let instances: Vec<Instance> = (0..SIDE * SIDE)
+        .map(|i| Instance::new(0, Affine3A::from_translation(at(i))))
+        .collect();
+    let scene = Scene::new(vec![tiny], instances);
+    for build in BuildPreset::ALL {
+        let mut p = BspParams::default();
+        p.object.build = build;
+        let bsp = Bsp::build(&scene, &p).unwrap();
+        let bytes = bsp.memory_bytes() as u64;
+        assert!(bytes < LIMIT, "{build:?}: {bytes} bytes");
+        eprintln!(
+            "a million objects, {build:?}: {bytes} bytes, {:?}",
+            bsp.stats()
+        );
+        let mut rng = Rng::new(9);
+        for _ in 0..2000 {
+            let i = rng.next_u64() as usize % (SIDE * SIDE);
+            let down = |o: Vec3| Ray1::new(o + Vec3::new(0.0, -0.05, 5.0), -Vec3::Z, 0.0, 100.0);
+            let hit = bsp
+                .intersect1(&down(at(i)))
+                .expect("a ray onto an object hits it");
+            assert_eq!(hit.inst as usize, i);
+            assert!((hit.t - 5.0).abs() < 1e-4, "{hit:?}");
+            // Between four objects there is nothing.
+            let gap = at(i) + Vec3::new(0.5, 0.5, 0.0);
+            assert!(!bsp.occluded1(&down(gap)), "{gap}");
+        }
+    }
+    if let Some(peak) = peak_rss_bytes() {
+        assert!(peak < LIMIT, "peak resident memory {peak} bytes");
     }
 }
