@@ -181,7 +181,14 @@ fn beam_side(n: usize) -> u32 {
 
 /// The rays of one kind, ordered in screen tiles for packets of `width` lanes. Every width
 /// gets the same rays (diffuse rays are seeded per pixel), in its own order.
-fn rays(s: &BuiltinScene, bsp: &Bsp, kind: RayKind, w: u32, h: u32, width: usize) -> Vec<Ray1> {
+pub(crate) fn rays(
+    s: &BuiltinScene,
+    bsp: &Bsp,
+    kind: RayKind,
+    w: u32,
+    h: u32,
+    width: usize,
+) -> Vec<Ray1> {
     rays_in_tiles(
         s,
         bsp,
@@ -216,7 +223,7 @@ fn rays_in_tiles(
 const CLOCK: Clock = Clock::ThreadCpu;
 
 /// One pass of `accel` over `rays` at a width: seconds, hits and the sum of hit `t`.
-fn pass_any<A: Accel>(
+pub(crate) fn pass_any<A: Accel>(
     accel: &A,
     rays: &[Ray1],
     occlusion: bool,
@@ -253,7 +260,7 @@ fn pass_beam(
 
 /// Medians of interleaved samples of each configuration (`f(i)` runs configuration `i`
 /// once), with each configuration's last result.
-fn interleaved(
+pub(crate) fn interleaved(
     n: usize,
     samples: usize,
     mut f: impl FnMut(usize) -> anyhow::Result<PassResult>,
@@ -387,7 +394,7 @@ fn build_timed<A: Accel>(
 /// fast top level), and scenes without the filter-function flag that only all-hits queries
 /// need (this experiment times first hits and occlusion).
 #[cfg(feature = "embree")]
-fn embree_params() -> coherent::embree::EmbreeParams {
+pub(crate) fn embree_params() -> coherent::embree::EmbreeParams {
     coherent::embree::EmbreeParams {
         all_hits: false,
         ..Default::default()
@@ -428,7 +435,7 @@ fn build_others(ctx: &mut Ctx, s: &BuiltinScene, repeats: usize) -> Vec<(AnyAcce
 
 /// The scenes: the built-in ones, then the real meshes (quick: the bunny only); a mesh that
 /// is not fetched is noted and left out.
-fn scene_list(ctx: &mut Ctx, size: SceneSize) -> Vec<BuiltinScene> {
+pub(crate) fn scene_list(ctx: &mut Ctx, size: SceneSize) -> Vec<BuiltinScene> {
     let mut list = scenes::all(size);
     let real = match size {
         SceneSize::Quick => &REAL_MESHES[..1],
@@ -948,7 +955,7 @@ const HIT_TOLERANCE: f64 = 1e-3;
 const T_TOLERANCE: f64 = 1e-3;
 
 /// Why `r` disagrees with `reference` over `rays` rays, if it does beyond the tolerances.
-fn disagreement(reference: &PassResult, r: &PassResult, rays: usize) -> Option<String> {
+pub(crate) fn disagreement(reference: &PassResult, r: &PassResult, rays: usize) -> Option<String> {
     let dh = r.hits.abs_diff(reference.hits) as f64;
     if dh > HIT_TOLERANCE * rays as f64 + 2.0 {
         return Some(format!(

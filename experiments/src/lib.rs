@@ -27,6 +27,7 @@ pub use timing::{Timing, speedup};
 // The experiments, one module each.
 pub mod aa;
 pub mod accel;
+pub mod builds;
 mod factors;
 pub mod kernels;
 pub mod regroup;
@@ -49,4 +50,5 @@ pub const EXPERIMENTS: &[Experiment] = &[
     aa::EXPERIMENT,
     // Beyond the contract's names (which keep their order).
     regroup::EXPERIMENT,
+    builds::EXPERIMENT,
 ];

@@ -20,9 +20,10 @@ use coherent::accel::Accel;
 use coherent::accel_any::{AccelKind, AnyAccel, AnyParams};
 use coherent::bsp::BuildPreset;
 use coherent::render::centres::psnr;
-use coherent::render::{LightSamples, RenderStats};
+use coherent::render::{LightSamples, RenderStats, Renderer};
 use coherent::simd::Backend;
 
+use crate::builds::TreeQuality;
 use crate::ctx::Ctx;
 use crate::experiment::{Experiment, Status};
 use crate::factors;
@@ -91,14 +92,16 @@ const LIGHT_SAMPLES_HEADER: &[&str] = &[
     "psnr_db",
     "psnr_vs_pixel_db",
 ];
-/// Each accelerator's build per scene (the BSP with both presets): seconds, bytes, the objects
-/// (instances, after the static ones are merged) and triangles it was built over, and the
-/// BSP's tree sizes.
+/// Each accelerator's build per scene (the BSP with both presets): build threads, seconds,
+/// bytes, the objects (instances, after the static ones are merged) and triangles it was
+/// built over, the BSP's tree quality, and a frame on it at the widest backend (seconds):
+/// build plus frame is the time to a first image.
 const BUILDS_FILE: &str = "table3_builds.csv";
 const BUILDS_HEADER: &[&str] = &[
     "scene",
     "accel",
     "preset",
+    "threads",
     "build_s",
     "memory_bytes",
     "objects",
@@ -106,6 +109,9 @@ const BUILDS_HEADER: &[&str] = &[
     "nodes",
     "leaf_refs",
     "max_depth",
+    "sah_cost",
+    "frame_backend",
+    "frame_s",
 ];
 /// Scenes, accelerators and backends left out, and why.
 const SKIPPED_FILE: &str = "table3_skipped.csv";
@@ -239,20 +245,22 @@ pub fn run_plan(
             }
         };
         let mut renderers = Vec::new();
+        let mut build_secs = Vec::new();
+        let mut fast = None;
         for &kind in accels {
             match frames::renderer_timed(&scene, kind) {
                 Ok((r, build_s)) => {
-                    build_row(&mut builds, name, &scene, r.accel(), build_s)?;
                     if kind == AccelKind::Bsp {
                         // The other preset, for the builds table only (the frames use the
                         // default one, as `coherent render` does).
                         let mut params = AnyParams::of(kind);
                         params.bsp.object.build = BuildPreset::Fast;
                         let start = std::time::Instant::now();
-                        let fast = AnyAccel::build(&scene.accel_scene(), &params)?;
+                        let a = AnyAccel::build(&scene.accel_scene(), &params)?;
                         let fast_s = start.elapsed().as_secs_f64();
-                        build_row(&mut builds, name, &scene, &fast, fast_s)?;
+                        fast = Some((Renderer::new(&scene, a, scene.width, scene.height)?, fast_s));
                     }
+                    build_secs.push(build_s);
                     renderers.push((kind, r));
                 }
                 Err(e) => {
@@ -321,6 +329,37 @@ pub fn run_plan(
                 csv.row(&cells)?;
             }
         }
+        // The builds, each with the time of a frame on its tree at the widest backend:
+        // every structure's frames in rounds, the fast preset's tree among them.
+        let widest = Some(frames::widest())
+            .filter(|b| backends.contains(b))
+            .unwrap_or(Backend::Scalar);
+        let mut built: Vec<(&Renderer<'_, AnyAccel>, f64)> = renderers
+            .iter()
+            .zip(&build_secs)
+            .map(|((_, r), &s)| (r, s))
+            .collect();
+        if let Some((r, s)) = &fast {
+            built.push((r, *s));
+        }
+        let mut frame_secs = vec![Vec::with_capacity(rounds); built.len()];
+        for _ in 0..rounds {
+            for (i, (r, _)) in built.iter().enumerate() {
+                frame_secs[i].push(frames::frame(&pool, widest, r, plan)?.1);
+            }
+        }
+        for ((r, build_s), secs) in built.iter().zip(&frame_secs) {
+            build_row(
+                &mut builds,
+                name,
+                &scene,
+                r.accel(),
+                *build_s,
+                (widest, median(secs)),
+            )?;
+        }
+        drop(built);
+
         // Table 3 explained: arithmetic, culling, lanes and beams, each alone.
         factors::measure(
             &mut factor_rows,
@@ -448,50 +487,165 @@ pub fn run_plan(
     Ok(())
 }
 
-/// A row of the builds table: the accelerator `a` of `scene`, built in `seconds`; for the BSP,
-/// its object trees' preset, nodes, leaf references and depth (summed and deepest over the
-/// object trees and the top tree).
+/// A row of the builds table: the accelerator `a` of `scene`, built in `seconds`, with the
+/// median seconds of a frame on it at a backend; for the BSP, its object trees' preset and
+/// tree quality ([`TreeQuality`]).
 fn build_row(
     out: &mut crate::table::CsvOut,
     name: &str,
     scene: &coherent::scene::RenderScene,
     a: &AnyAccel,
     seconds: f64,
+    (backend, frame_s): (Backend, f64),
 ) -> anyhow::Result<()> {
-    let (preset, nodes, refs, depth) = match a {
+    let (preset, threads, quality) = match a {
         AnyAccel::Bsp(b) => {
-            let trees = b.mesh_trees().iter().map(|m| &m.tree).chain([b.top_tree()]);
-            let (mut nodes, mut refs, mut depth) = (0, 0, 0);
-            for t in trees {
-                nodes += t.stats.nodes;
-                refs += t.stats.leaf_refs;
-                depth = depth.max(t.stats.max_depth);
-            }
-            let preset = match b.params().object.build {
-                BuildPreset::Exact => "exact",
-                BuildPreset::Fast => "fast",
-            };
-            (
-                preset,
-                nodes.to_string(),
-                refs.to_string(),
-                depth.to_string(),
-            )
+            let q = TreeQuality::of(b);
+            let cells = [
+                q.nodes.to_string(),
+                q.leaf_refs.to_string(),
+                q.max_depth.to_string(),
+                format!("{:.4}", q.sah_cost),
+            ];
+            (q.preset, rayon::current_num_threads(), cells)
         }
-        _ => ("default", String::new(), String::new(), String::new()),
+        // Embree as the renderer asks for it: one build thread.
+        _ => ("default", 1, Default::default()),
     };
+    let [nodes, refs, depth, sah] = &quality;
     out.row(&[
         &name,
         &a.kind(),
         &preset,
+        &threads,
         &format!("{seconds:.6e}"),
         &a.memory_bytes(),
         &scene.instances.len(),
         &scene.triangles(),
-        &nodes,
-        &refs,
-        &depth,
+        nodes,
+        refs,
+        depth,
+        sah,
+        &backend.name(),
+        &format!("{frame_s:.6e}"),
     ])
+}
+
+/// The built-in scene of many objects, whose targets compare the BSP with Embree per width.
+const MANY_OBJECTS: &str = "city";
+
+/// The report's builds section: per scene, each build's seconds and the time to a first
+/// image (build plus one frame at the widest backend), the presets' SAH costs, and the
+/// many-object scene's targets against Embree.
+fn builds_md(b: &Table, frames: &Table) -> anyhow::Result<String> {
+    let mut md = String::from(
+        "\nBuilds and the time to a first image (`table3_builds.csv`): each structure built \
+         over the scene's objects once the static instances are merged per transform (as \
+         `coherent render` does unless told `--no-merge`), then one frame on it at the widest \
+         backend, one thread (median of the rounds). The BSP builds on every core with both \
+         presets (the frames above use `exact`), Embree on one thread, as the renderer asks. \
+         SAH: each BSP object tree's cost relative to its root box, summed.\n\n",
+    );
+    let mut rows = Vec::new();
+    let mut fast_wins = (0, 0);
+    let mut checks = Vec::new();
+    for scene in b.distinct("scene")? {
+        let get = |accel: &str, preset: &str| -> anyhow::Result<Option<(f64, f64, f64)>> {
+            Ok(
+                match find(
+                    b,
+                    &[("scene", &scene), ("accel", accel), ("preset", preset)],
+                )? {
+                    Some(r) => Some((
+                        b.f64(r, "build_s")?,
+                        b.f64(r, "frame_s")?,
+                        b.f64(r, "sah_cost").unwrap_or(f64::NAN),
+                    )),
+                    None => None,
+                },
+            )
+        };
+        let (exact, fast, embree) = (
+            get("bsp", "exact")?,
+            get("bsp", "fast")?,
+            get("embree", "default")?,
+        );
+        let r0 = b.rows_where("scene", &scene)?[0];
+        let both = |v: Option<(f64, f64, f64)>| {
+            v.map_or("—".to_owned(), |(bs, fs, _)| {
+                format!("{} + {} s", fmt_num(bs), fmt_num(fs))
+            })
+        };
+        if let (Some(x), Some(f)) = (exact, fast) {
+            fast_wins.1 += 1;
+            if f.0 + f.1 < x.0 + x.1 {
+                fast_wins.0 += 1;
+            }
+        }
+        rows.push(vec![
+            scene.clone(),
+            b.get(r0, "objects")?.to_owned(),
+            b.get(r0, "triangles")?.to_owned(),
+            both(exact),
+            both(fast),
+            both(embree),
+            match (exact, fast) {
+                (Some(x), Some(f)) if x.2 > 0.0 => format!("{:+.1} %", 100.0 * (f.2 / x.2 - 1.0)),
+                _ => "—".to_owned(),
+            },
+        ]);
+        if scene == MANY_OBJECTS {
+            if let (Some(x), Some(e)) = (exact, embree) {
+                checks.push(Check::at_most(
+                    &scene,
+                    "bsp build <= 1.5x embree's",
+                    format!("{:.2}x", x.0 / e.0),
+                    x.0 / e.0,
+                    1.5,
+                ));
+            }
+            for r in frames.rows_where("scene", &scene)? {
+                if frames.get(r, "accel")? != "bsp" {
+                    continue;
+                }
+                let backend = frames.get(r, "backend")?;
+                if let Some(e) = find(
+                    frames,
+                    &[("scene", &scene), ("backend", backend), ("accel", "embree")],
+                )? {
+                    let (bs, es) = (frames.f64(r, "seconds")?, frames.f64(e, "seconds")?);
+                    checks.push(Check::at_most(
+                        &scene,
+                        "bsp frame <= embree's, every backend",
+                        format!("{backend} {:.2}x", bs / es),
+                        bs / es,
+                        1.0,
+                    ));
+                }
+            }
+        }
+    }
+    md.push_str(&markdown_table(
+        &[
+            "scene",
+            "objects",
+            "triangles",
+            "bsp exact: build + frame",
+            "bsp fast: build + frame",
+            "embree: build + frame",
+            "SAH fast vs exact",
+        ],
+        &rows,
+    ));
+    md.push_str(&format!(
+        "\nThe fast preset gives the shorter time to a first image on {} of {} scenes.\n",
+        fast_wins.0, fast_wins.1
+    ));
+    if !checks.is_empty() {
+        md.push_str("\nThe many-object scene against Embree:\n\n");
+        md.push_str(&condensed("scene", &checks));
+    }
+    Ok(md)
 }
 
 /// The row of `t` with these key cells.
@@ -796,14 +950,7 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     if let Some(b) = ctx.read_csv(BUILDS_FILE, BUILDS_HEADER)?
         && !b.rows.is_empty()
     {
-        md.push_str(
-            "\nEach accelerator's build, the BSP's with both presets (`table3_builds.csv`: \
-             seconds, bytes, the objects it was built over once the static instances are merged \
-             per transform, as `coherent render` merges them unless told `--no-merge`, and the \
-             BSP's nodes, leaf references and depth over all its trees; the frames above use \
-             the `exact` preset):\n\n",
-        );
-        md.push_str(&b.to_markdown());
+        md.push_str(&builds_md(&b, &t)?);
     }
 
     let scenes = t.distinct("scene")?;
@@ -1243,6 +1390,11 @@ intensity = [10, 10, 10]
             .map(|&r| builds.get(r, "preset").unwrap())
             .collect();
         assert_eq!(presets, ["exact", "fast"]);
+        for r in builds.rows_where("scene", "ball").unwrap() {
+            assert!(builds.f64(r, "sah_cost").unwrap() > 0.0);
+            assert!(builds.f64(r, "frame_s").unwrap() > 0.0);
+            assert_eq!(builds.get(r, "frame_backend").unwrap(), simd.name());
+        }
         // The factor table starts with the exact scalar reference.
         let f = ctx
             .read_csv(factors::FILE, factors::HEADER)

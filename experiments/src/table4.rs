@@ -1,11 +1,17 @@
 //! Experiment `table4`: the paper's Table 4 (section 7), the characteristics of the test
 //! scenes, for our built-in stand-ins of its four scenes (generated in memory, no download):
 //! instanced triangles, objects (instances), lights, reflection/refraction depth and
-//! materials, beside the paper's triangles, lights and depth. Nothing is timed; quick and
-//! full runs give the same rows.
+//! materials, beside the paper's triangles, lights and depth; and the BSP the renderer builds
+//! over each (static instances merged), with each build preset: objects, nodes, leaf
+//! references, depth and SAH cost (`table4_trees.csv`). Nothing is timed; quick and full runs
+//! give the same rows.
 
 use coherent::scene::builtin::{PAPER_TABLE4, by_name};
 
+use coherent::accel::Accel;
+use coherent::bsp::{Bsp, BuildPreset};
+
+use crate::builds::TreeQuality;
 use crate::ctx::Ctx;
 use crate::experiment::{Experiment, Status};
 use crate::table::{PaperTable, markdown_table};
@@ -14,7 +20,7 @@ pub const EXPERIMENT: Experiment = Experiment {
     name: "table4",
     description: "the characteristics of the test scenes",
     paper: "Table 4 (section 7)",
-    csv: &[FILE],
+    csv: &[FILE, TREES_FILE],
     plots: &[],
     status: Status::Ready {
         run,
@@ -33,6 +39,19 @@ pub(crate) const HEADER: &[&str] = &[
     "depth",
     "materials",
     "light_kinds",
+];
+
+/// The BSP over each scene as the renderer builds it, per build preset.
+pub(crate) const TREES_FILE: &str = "table4_trees.csv";
+pub(crate) const TREES_HEADER: &[&str] = &[
+    "scene",
+    "preset",
+    "objects",
+    "triangles",
+    "nodes",
+    "leaf_refs",
+    "max_depth",
+    "sah_cost",
 ];
 
 /// The paper's Table 4.
@@ -68,6 +87,28 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
         ])?;
     }
     csv.finish()?;
+
+    let mut trees = ctx.csv(TREES_FILE, TREES_HEADER)?;
+    for row in PAPER_TABLE4 {
+        let Some(s) = by_name(row.name) else { continue };
+        let (s, _) = s.merge_static();
+        let accel = s.accel_scene();
+        for preset in BuildPreset::ALL {
+            let b = Bsp::build(&accel, &crate::builds::bsp_params(preset))?;
+            let q = TreeQuality::of(&b);
+            trees.row(&[
+                &row.name,
+                &q.preset,
+                &s.instances.len(),
+                &s.triangles(),
+                &q.nodes,
+                &q.leaf_refs,
+                &q.max_depth,
+                &format!("{:.4}", q.sah_cost),
+            ])?;
+        }
+    }
+    trees.finish()?;
     Ok(())
 }
 
@@ -112,6 +153,14 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
         ],
         &rows,
     ));
+    if let Some(t) = ctx.read_csv(TREES_FILE, TREES_HEADER)? {
+        md.push_str(
+            "\nThe BSP over each scene as the renderer builds it (static instances merged), \
+             per build preset (`table4_trees.csv`; SAH: each object tree's cost relative to \
+             its root box, summed):\n\n",
+        );
+        md.push_str(&t.to_markdown());
+    }
     Ok(Some(md))
 }
 
@@ -134,5 +183,12 @@ mod tests {
             "{md}"
         );
         assert!(md.contains("goniodiagram"), "{md}");
+        // Both presets' trees per scene.
+        let t = ctx.read_csv(TREES_FILE, TREES_HEADER).unwrap().unwrap();
+        assert_eq!(t.rows.len(), 2 * PAPER_TABLE4.len());
+        for r in 0..t.rows.len() {
+            assert!(t.f64(r, "nodes").unwrap() > 0.0);
+            assert!(t.f64(r, "sah_cost").unwrap() > 0.0);
+        }
     }
 }
