@@ -519,7 +519,11 @@ macro_rules! accel_backends {
             use super::*;
             accel_tests!(scalar, $which, Backend::Scalar);
             accel_tests!(sse, $which, Backend::Sse);
+            // On x86-64, wide4 and wide8 give sse's and avx2's answers bit for bit (the lane
+            // test): one copy of every traversal per width is enough.
+            #[cfg(not(target_arch = "x86_64"))]
             accel_tests!(wide4, $which, Backend::Wide4);
+            #[cfg(not(target_arch = "x86_64"))]
             accel_tests!(wide8, $which, Backend::Wide8);
             accel_tests!(wide16, $which, Backend::Wide16);
             accel_tests!(avx2, $which, Backend::Avx2);
