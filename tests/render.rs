@@ -67,7 +67,9 @@ fn omni(position: Vec3, intensity: [f32; 3]) -> Light {
     Light::Omni(coherent::light::Omni::new(position, intensity).unwrap())
 }
 
-fn render(s: &RenderScene, backend: Backend, kind: AccelKind) -> Option<Vec<[f32; 3]>> {
+/// The renderer of `s` on accelerator `kind` (built once: every backend renders with it), or
+/// `None` where the accelerator cannot run here.
+fn renderer(s: &RenderScene, kind: AccelKind) -> Option<Renderer<'_, AnyAccel>> {
     let accel = match AnyAccel::build(&s.accel_scene(), &AnyParams::of(kind)) {
         Ok(a) => a,
         Err(AccelError::Unavailable { reason, .. }) => {
@@ -76,15 +78,19 @@ fn render(s: &RenderScene, backend: Backend, kind: AccelKind) -> Option<Vec<[f32
         }
         Err(e) => panic!("{kind}: {e}"),
     };
-    let r = Renderer::new(s, accel, W, H).unwrap();
-    let (img, stats) = render_centres(&r, backend, W, H).unwrap();
+    Some(Renderer::new(s, accel, W, H).unwrap())
+}
+
+/// One sample at every pixel centre on `backend`.
+fn render(r: &Renderer<'_, AnyAccel>, backend: Backend) -> Vec<[f32; 3]> {
+    let (img, stats) = render_centres(r, backend, W, H).unwrap();
     assert_eq!(stats.nan, 0);
     assert_eq!(stats.rays(RayKind::Primary), u64::from(W * H));
-    Some(img)
+    img
 }
 
 fn scalar_bsp(s: &RenderScene) -> Vec<[f32; 3]> {
-    render(s, Backend::Scalar, AccelKind::Bsp).unwrap()
+    render(&renderer(s, AccelKind::Bsp).unwrap(), Backend::Scalar)
 }
 
 /// The camera's unit direction through the centre of pixel (x, y), in f64.
@@ -553,8 +559,18 @@ fn every_backend_and_accelerator_renders_the_scalar_bsp_image() {
             .fold(0.0f32, f32::max)
             .max(1e-3);
         assert!(peak > 0.01, "{}: the image is black", sc.name);
-        for backend in Backend::usable() {
-            for kind in AccelKind::ALL {
+        for kind in AccelKind::ALL {
+            if kind == AccelKind::Brute && sc.triangles() > 2_000 {
+                continue; // brute force is for the small scenes
+            }
+            if !kind.compiled() {
+                eprintln!("skipping accelerator {kind}: not compiled in");
+                continue;
+            }
+            let Some(r) = renderer(sc, kind) else {
+                continue;
+            };
+            for backend in Backend::usable() {
                 // The portable pulp backends with the BSP only: the same widths as avx2 and
                 // avx512 (wide4 on aarch64), which cover every accelerator (backend x
                 // accelerator x scene renders are the suite's slowest part).
@@ -562,16 +578,7 @@ fn every_backend_and_accelerator_renders_the_scalar_bsp_image() {
                 if pulp && kind != AccelKind::Bsp {
                     continue;
                 }
-                if kind == AccelKind::Brute && sc.triangles() > 2_000 {
-                    continue; // brute force is for the small scenes
-                }
-                if !kind.compiled() {
-                    eprintln!("skipping accelerator {kind}: not compiled in");
-                    continue;
-                }
-                let Some(img) = render(sc, backend, kind) else {
-                    continue;
-                };
+                let img = render(&r, backend);
                 let (db, dropped) = psnr_but_edge_pixels(&img, &reference, peak);
                 assert!(
                     db >= 40.0,
@@ -596,9 +603,10 @@ fn regrouped_secondary_packets_give_each_sample_its_radiance() {
         if sc.depth == 0 {
             continue;
         }
+        let accel = AnyAccel::build(&sc.accel_scene(), &AnyParams::of(AccelKind::Bsp)).unwrap();
+        let mut r = Renderer::new(sc, accel, W, H).unwrap();
         for backend in Backend::usable() {
-            let accel = AnyAccel::build(&sc.accel_scene(), &AnyParams::of(AccelKind::Bsp)).unwrap();
-            let mut r = Renderer::new(sc, accel, W, H).unwrap();
+            r.regroup = false;
             let (plain, plain_stats) = render_centres(&r, backend, W, H).unwrap();
             r.regroup = true;
             let (img, stats) = render_centres(&r, backend, W, H).unwrap();
@@ -646,9 +654,10 @@ fn camera_beams_give_the_lane_packets_image() {
     // shared edge a ray hits (the dropped pixels).
     use coherent::render::Packets;
     for sc in &lit_scenes() {
+        let accel = AnyAccel::build(&sc.accel_scene(), &AnyParams::of(AccelKind::Bsp)).unwrap();
+        let mut r = Renderer::new(sc, accel, W, H).unwrap();
         for backend in Backend::usable() {
-            let accel = AnyAccel::build(&sc.accel_scene(), &AnyParams::of(AccelKind::Bsp)).unwrap();
-            let mut r = Renderer::new(sc, accel, W, H).unwrap();
+            r.packets = Packets::Lanes;
             let (plain, plain_stats) = render_centres(&r, backend, W, H).unwrap();
             r.packets = Packets::Beam;
             let (img, stats) = render_centres(&r, backend, W, H).unwrap();
@@ -674,6 +683,37 @@ fn camera_beams_give_the_lane_packets_image() {
                  {dropped} most different pixel(s))"
             );
         }
+    }
+}
+
+/// The image of `s` at 64 x 48, 1 sample per pixel, scalar + BSP, as displayed.
+fn displayed_frame(s: &RenderScene) -> Vec<[f32; 3]> {
+    use coherent::film::{FilmOptions, Method};
+    let accel = AnyAccel::build(&s.accel_scene(), &AnyParams::of(AccelKind::Bsp)).unwrap();
+    let r = Renderer::new(s, accel, 64, 48).unwrap();
+    let opts = FilmOptions::new(64, 48, Method::Uniform { spp: 1 });
+    coherent::render::render_frame(Backend::Scalar, &r, &opts, &|_| {})
+        .unwrap()
+        .displayed(Backend::Scalar)
+        .unwrap()
+}
+
+#[test]
+fn merged_scenes_render_the_unmerged_image() {
+    // The city: thousands of static objects become one; room2: a furnished room.
+    for name in ["city", "room2"] {
+        let s = coherent::scene::load(name).unwrap();
+        let (m, r) = s.clone().merge_static();
+        assert!(r.merged > 0, "{name}: {r:?}");
+        let (a, b) = (displayed_frame(&s), displayed_frame(&m));
+        // Only which of two triangles sharing an edge a ray hits may differ.
+        let differ = a.iter().zip(&b).filter(|(x, y)| x != y).count();
+        let db = psnr(&a, &b, 1.0);
+        assert!(
+            differ * 100 <= a.len() && db >= 40.0,
+            "{name}: {differ} of {} pixels differ, {db:.1} dB",
+            a.len()
+        );
     }
 }
 

@@ -554,7 +554,9 @@ mod tests {
         let md = report(&ctx).unwrap().unwrap();
         // fast / embree: 30 / 20 on one thread, 18 / 12 on two; SAH +5 %.
         assert!(
-            md.contains("| mesh | 40 | 30 | 38 | 18 | 20 | 12 | 4 | 1.50x | 1.50x | +5.0 % |"),
+            md.contains(
+                "| mesh | 40.0 | 30.0 | 38.0 | 18.0 | 20.0 | 12.0 | 4.00 | 1.50x | 1.50x | +5.0 % |"
+            ),
             "{md}"
         );
         assert!(md.contains("| 0.95x | 0.80x |"), "{md}");
