@@ -239,7 +239,7 @@ fn others(ctx: &mut Ctx, s: &BuiltinScene, repeats: usize, out: &mut CsvOut) -> 
                 coherent::embree::Embree::build(&s.scene, &params)
             }) {
                 Ok((e, secs)) => other_row(out, s, "embree", threads, &e, secs)?,
-                Err(e) => ctx.note(format!("accel: embree's build of {} left out: {e}", s.name)),
+                Err(e) => ctx.note(format!("builds: embree left out of {}: {e}", s.name)),
             }
         }
         #[cfg(feature = "obvhs")]

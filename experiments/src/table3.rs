@@ -509,7 +509,7 @@ fn build_row(
             ];
             (q.preset, rayon::current_num_threads(), cells)
         }
-        // Embree as the renderer asks for it: one build thread.
+        // Embree as the renderer asks for it (one build thread); obvhs builds on one.
         _ => ("default", 1, Default::default()),
     };
     let [nodes, refs, depth, sah] = &quality;
