@@ -277,19 +277,22 @@ fn other_row(
     ])
 }
 
+/// The value in `column` of the row of (scene, accel, preset, threads), if there is one.
+fn cell(t: &Table, key: [&str; 4], column: &str) -> Option<f64> {
+    let [scene, accel, preset, threads] = key;
+    let keys = [
+        ("scene", scene),
+        ("accel", accel),
+        ("preset", preset),
+        ("threads", threads),
+    ];
+    let r = crate::table3::find(t, &keys).ok()??;
+    t.f64(r, column).ok()
+}
+
 /// The build time of (accel, preset, threads) on `scene`, in milliseconds.
 fn build_ms(t: &Table, scene: &str, accel: &str, preset: &str, threads: &str) -> Option<f64> {
-    let r = crate::table3::find(
-        t,
-        &[
-            ("scene", scene),
-            ("accel", accel),
-            ("preset", preset),
-            ("threads", threads),
-        ],
-    )
-    .ok()??;
-    t.f64(r, "build_ms").ok()
+    cell(t, [scene, accel, preset, threads], "build_ms")
 }
 
 /// The thread counts in the table, fewest first.
@@ -360,31 +363,11 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     let mut rows = Vec::new();
     let mut checks = Vec::new();
     let bytes = |scene: &str, accel: &str, preset: &str| -> Option<(f64, f64)> {
-        let r = crate::table3::find(
-            &t,
-            &[
-                ("scene", scene),
-                ("accel", accel),
-                ("preset", preset),
-                ("threads", one.as_str()),
-            ],
-        )
-        .ok()??;
-        Some((t.f64(r, "memory_bytes").ok()?, t.f64(r, "triangles").ok()?))
+        let key = [scene, accel, preset, one.as_str()];
+        Some((cell(&t, key, "memory_bytes")?, cell(&t, key, "triangles")?))
     };
-    let sah = |scene: &str, preset: &str| -> Option<f64> {
-        let r = crate::table3::find(
-            &t,
-            &[
-                ("scene", scene),
-                ("accel", "bsp"),
-                ("preset", preset),
-                ("threads", one.as_str()),
-            ],
-        )
-        .ok()??;
-        t.f64(r, "sah_cost").ok()
-    };
+    let sah =
+        |scene: &str, preset: &str| cell(&t, [scene, "bsp", preset, one.as_str()], "sah_cost");
     for s in t.distinct("scene")? {
         let ms = |a: &str, p: &str, th: &str| build_ms(&t, &s, a, p, th);
         let cell = |v: Option<f64>| v.map_or("—".to_owned(), fmt_num);
