@@ -7,7 +7,7 @@ use core::fmt;
 use core::str::FromStr;
 
 use coherent_accel::{
-    Accel, AccelError, BruteForce, BuildStats, Hit1, Hits, Instance, Ray1, Rays, Scene,
+    Accel, AccelError, BruteForce, BuildStats, Hit1, Hits, Instance, Ray1, Rays, Scene, Work,
 };
 use coherent_bsp::{Bsp, BspParams};
 use coherent_simd::Lanes;
@@ -290,6 +290,46 @@ impl Accel for AnyAccel {
         f: &mut impl FnMut(usize, Hit1),
     ) {
         dispatch!(self, a => a.intersect_all(l, rays, active, f))
+    }
+
+    fn counts_work(&self) -> bool {
+        dispatch!(self, a => a.counts_work())
+    }
+
+    // Named through the trait: the BSP's own `intersect_counted` family takes its detailed
+    // counters.
+    #[inline(always)]
+    fn intersect_work<L: Lanes>(
+        &self,
+        l: L,
+        rays: &Rays<L>,
+        active: L::Mask,
+        work: &mut Work,
+    ) -> Hits<L> {
+        dispatch!(self, a => Accel::intersect_work(a, l, rays, active, work))
+    }
+
+    #[inline(always)]
+    fn occluded_work<L: Lanes>(
+        &self,
+        l: L,
+        rays: &Rays<L>,
+        active: L::Mask,
+        work: &mut Work,
+    ) -> L::Mask {
+        dispatch!(self, a => Accel::occluded_work(a, l, rays, active, work))
+    }
+
+    #[inline(always)]
+    fn intersect_beam_work<L: Lanes>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        hits: &mut [Hits<L>],
+        work: &mut Work,
+    ) {
+        dispatch!(self, a => Accel::intersect_beam_work(a, l, rays, active, hits, work))
     }
 
     #[inline(always)]

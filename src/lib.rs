@@ -21,6 +21,7 @@ pub mod machine;
 pub mod material;
 pub mod median;
 pub mod mesh_file;
+pub mod plot_font;
 pub mod render;
 pub mod require;
 pub mod sampler;

@@ -25,7 +25,7 @@ enum Command {
     /// SCENE is a scene file (.toml), a built-in scene's name (`coherent scenes`) or a bare
     /// mesh file (framed by a default camera and light). The image is the same for any
     /// thread count; backends and accelerators differ only in rounding.
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// List the built-in scenes and the scene files of the repository's `scenes/` folder
     /// (or `$COHERENT_SCENES`).
     Scenes,
@@ -134,6 +134,14 @@ struct RenderArgs {
     /// beam; the others answer packet by packet). The same image up to edge hits.
     #[arg(long, default_value = "lanes")]
     packets: coherent::render::Packets,
+    /// Per-pixel maps of where coherence breaks, written beside the image as
+    /// `IMAGE.KIND.png` (a heat map with a colour bar) and `IMAGE.KIND.exr` (the values):
+    /// `steps` (inner nodes visited per sample, by the packets its rays were in), `tests`
+    /// (triangle tests per sample), `lanes` (active lanes of those packets), `time` (ns per
+    /// sample). Comma-separated. `steps` and `tests` need `--accel bsp` (the others'
+    /// traversal is not ours to count). The maps' bookkeeping slows the frame.
+    #[arg(long, value_delimiter = ',')]
+    aov: Vec<coherent::render::AovKind>,
     /// Keep every instance its own object under the top tree, as the scene places it (the
     /// paper's two levels). By default the instances that never move and share a transform
     /// are merged into one object first: a scene of thousands of static objects then builds

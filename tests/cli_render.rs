@@ -93,6 +93,35 @@ fn every_backend_that_runs_here_renders_a_frame() {
 }
 
 #[test]
+fn aov_writes_each_map_beside_the_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cornell.png");
+    let out = render_cornell(&path, &["--aov", "steps,lanes", "--accel", "bsp"]);
+    assert!(out.status.success(), "{}", text(&out));
+    for file in [
+        "cornell.steps.png",
+        "cornell.steps.exr",
+        "cornell.lanes.png",
+        "cornell.lanes.exr",
+    ] {
+        let written = std::fs::metadata(dir.path().join(file)).map_or(0, |m| m.len());
+        assert!(written > 0, "{file} not written:\n{}", text(&out));
+    }
+    assert!(text(&out).contains("map steps: mean"), "{}", text(&out));
+    // Brute force does not count its work: steps are refused, with the reason.
+    let out = render_cornell(&path, &["--aov", "tests", "--accel", "brute"]);
+    assert!(!out.status.success());
+    assert!(text(&out).contains("does not count"), "{}", text(&out));
+    let out = render_cornell(&path, &["--aov", "nodes"]);
+    assert!(!out.status.success());
+    assert!(
+        text(&out).contains("steps, tests, lanes or time"),
+        "{}",
+        text(&out)
+    );
+}
+
+#[test]
 fn stages_prints_the_time_of_each_pipeline_stage() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("cornell.exr");

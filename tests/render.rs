@@ -1097,3 +1097,37 @@ fn every_scene_file_renders() {
     }
     eprintln!("{rendered} of {} scene files rendered", files.len());
 }
+
+#[test]
+fn per_pixel_maps_leave_the_image_alone_and_charge_every_pixel() {
+    use coherent::render::{AovBuffer, AovKind, Packets};
+    use std::sync::Arc;
+    let sc = &lit_scenes()[0];
+    let accel = AnyAccel::build(&sc.accel_scene(), &AnyParams::of(AccelKind::Bsp)).unwrap();
+    let mut r = Renderer::new(sc, accel, W, H).unwrap();
+    for backend in [Backend::Scalar, Backend::widest()] {
+        for packets in Packets::ALL {
+            r.packets = packets;
+            r.aov = None;
+            let (plain, _) = render_centres(&r, backend, W, H).unwrap();
+            let buf = Arc::new(AovBuffer::new(W, H));
+            r.aov = Some(buf.clone());
+            let (img, _) = render_centres(&r, backend, W, H).unwrap();
+            let what = format!("{}, {packets}", backend.name());
+            assert!(img == plain, "{what}: the maps changed the image");
+            let lanes = buf.map(AovKind::Lanes);
+            let steps = buf.map(AovKind::Steps);
+            let n = backend.lanes() as f32;
+            for (i, (&l, &s)) in lanes.iter().zip(&steps).enumerate() {
+                assert!((1.0..=n).contains(&l), "{what}: pixel {i} lanes {l}");
+                assert!(s.is_finite() && s >= 0.0, "{what}: pixel {i} steps {s}");
+                if backend == Backend::Scalar {
+                    assert_eq!(l, 1.0, "{what}: pixel {i}");
+                }
+            }
+            assert!(steps.iter().any(|&s| s > 0.0), "{what}: no steps counted");
+            assert!(buf.map(AovKind::Tests).iter().any(|&t| t > 0.0), "{what}");
+        }
+    }
+    r.aov = None;
+}

@@ -30,6 +30,7 @@ pub mod accel;
 pub mod builds;
 mod factors;
 pub mod kernels;
+pub mod maps;
 pub mod regroup;
 pub mod table1;
 pub mod table2;
@@ -51,4 +52,5 @@ pub const EXPERIMENTS: &[Experiment] = &[
     // Beyond the contract's names (which keep their order).
     regroup::EXPERIMENT,
     builds::EXPERIMENT,
+    maps::EXPERIMENT,
 ];

@@ -12,12 +12,11 @@ use plotters::coord::ranged1d::{
 use plotters::prelude::*;
 use std::fmt::Display;
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
 
 /// Pixel size of every chart.
 const SIZE: (u32, u32) = (900, 560);
 /// The font family name the charts use (registered from embedded bytes).
-const FONT: &str = "sans-serif";
+const FONT: &str = coherent::plot_font::FAMILY;
 
 /// One line of a [`LineChart`].
 #[derive(Clone, Debug)]
@@ -101,16 +100,7 @@ fn colour(i: usize) -> RGBColor {
 
 /// Registers the embedded font once per process.
 fn ensure_font() -> anyhow::Result<()> {
-    static REGISTERED: OnceLock<bool> = OnceLock::new();
-    let ok = *REGISTERED.get_or_init(|| {
-        plotters::style::register_font(FONT, FontStyle::Normal, epaint_default_fonts::UBUNTU_LIGHT)
-            .is_ok()
-    });
-    if ok {
-        Ok(())
-    } else {
-        Err(anyhow!("the embedded plot font could not be loaded"))
-    }
+    coherent::plot_font::register().map_err(|e| anyhow!(e))
 }
 
 /// Writes `chart` as `out/plots/{stem}.png` and `.svg`.

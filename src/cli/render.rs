@@ -3,14 +3,18 @@
 //! the image, and print one summary line (rays by kind, time, Mrays/s, active lanes per
 //! packet per stage and per ray depth, material passes per packet).
 
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, bail};
 use coherent::accel::Accel;
 use coherent::accel_any::{AccelKind, AnyAccel, AnyParams};
-use coherent::film::{FilmOptions, Method, PassReport};
+use coherent::film::{
+    FilmOptions, Method, PassReport, scale_top, write_heatmap_png, write_map_exr,
+};
 use coherent::median::median;
-use coherent::render::{Packets, RayKind, Renderer, render_frame};
+use coherent::render::{AovBuffer, AovKind, Packets, RayKind, Renderer, render_frame};
 use coherent::simd::Backend;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -109,11 +113,21 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .with_context(|| format!("building the {kind} accelerator for {}", scene.name))?;
     let build = t_build.elapsed();
     let memory = accel.memory_bytes();
+    if let Some(k) = args.aov.iter().find(|k| k.needs_counts())
+        && !accel.counts_work()
+    {
+        bail!(
+            "--aov {k}: the {kind} accelerator does not count its traversal's steps and tests \
+             (only the BSP's traversal is ours to count); `lanes` and `time` work with any"
+        );
+    }
     let mut renderer = Renderer::new(&scene, accel, w, h).context("the scene's camera")?;
     renderer.light_samples = args.light_samples;
     renderer.regroup = args.regroup;
     renderer.packets = args.packets;
     renderer.time_stages = args.stages;
+    let aov = (!args.aov.is_empty()).then(|| Arc::new(AovBuffer::new(w, h)));
+    renderer.aov = aov.clone();
 
     let threads = args.threads.unwrap_or_else(|| {
         std::thread::available_parallelism()
@@ -168,6 +182,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let seconds = Duration::from_secs_f64(median(&frames));
     bar.finish_and_clear();
     rendered.write(&args.out)?;
+
+    if let Some(buf) = &aov {
+        write_maps(args, buf, backend)?;
+    }
 
     let st = &rendered.stats;
     let rays = st.total_rays();
@@ -260,4 +278,39 @@ fn stop_text<S>(r: &coherent::film::Rendered<S>) -> String {
         if n == 1 { "" } else { "es" },
         r.stop.describe()
     )
+}
+
+/// `IMAGE.KIND.EXT` beside the image `out`.
+fn map_path(out: &Path, kind: AovKind, ext: &str) -> PathBuf {
+    let stem = out
+        .file_stem()
+        .map_or_else(|| "image".into(), |s| s.to_string_lossy());
+    out.with_file_name(format!("{stem}.{}.{ext}", kind.name()))
+}
+
+/// Writes each asked-for map beside the image and says where, with its mean.
+fn write_maps(args: &RenderArgs, buf: &AovBuffer, backend: Backend) -> anyhow::Result<()> {
+    let (w, h) = (buf.width(), buf.height());
+    for &kind in &args.aov {
+        let map = buf.map(kind);
+        // Lanes on the packet's own scale, so that widths compare.
+        let top = match kind {
+            AovKind::Lanes => backend.lanes() as f32,
+            _ => scale_top(&map),
+        };
+        let (png, exr) = (
+            map_path(&args.out, kind, "png"),
+            map_path(&args.out, kind, "exr"),
+        );
+        write_heatmap_png(&png, &map, w, h, top, kind.label())?;
+        write_map_exr(&exr, &map, w, h, kind.name())?;
+        let mean = map.iter().map(|&v| f64::from(v)).sum::<f64>() / map.len().max(1) as f64;
+        println!(
+            "map {kind}: mean {mean:.2} {} -> {} and {}",
+            kind.label(),
+            png.display(),
+            exr.display()
+        );
+    }
+    Ok(())
 }

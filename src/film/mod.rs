@@ -5,6 +5,7 @@
 
 mod accuracy;
 mod batch;
+mod heatmap;
 mod matrix;
 mod output;
 mod render;
@@ -20,6 +21,7 @@ use std::time::Duration;
 
 pub use accuracy::display_difference;
 pub use batch::{PacketIn, PacketOut, trace_each, trace_packets};
+pub use heatmap::{scale_top, write_heatmap_png, write_map_exr};
 pub use matrix::{Film, ScreenMatrix, matrix_of};
 pub use render::render;
 pub use superpixel::Superpixels;

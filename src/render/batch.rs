@@ -20,11 +20,11 @@
 //! inlined into each backend's kernel, and a second call site would be a second copy of it
 //! per backend (build time and code size).
 
-use coherent_accel::{Accel, Hits, Rays};
+use coherent_accel::{Accel, Hits, Rays, Work};
 use coherent_simd::{Lanes, MAX_LANES, Rgbs, SimdF32, SimdI32, SimdMask, Vec3s};
 
 use super::stats::StageClock;
-use super::{Differentials, Packets, RenderStats, Renderer, Segment, Stage};
+use super::{AovBuffer, Differentials, Packets, RenderStats, Renderer, Segment, Stage};
 use crate::film::{PacketIn, PacketOut};
 
 /// The `f32` values a lane of a segment carries: origin, direction, `tmin`, `tmax`, the four
@@ -63,6 +63,21 @@ impl<A: Accel> Renderer<'_, A> {
         let mut generation: Vec<Segment<L>> = Vec::new();
         let mut lanes: Vec<Lane> = Vec::new();
         let mut next_packet = 0;
+        // With per-pixel maps, each sample's pixel (by slot) and one sample more there.
+        let aov = self.aov.as_deref();
+        let mut pixels: Vec<u32> = Vec::new();
+        if let Some(a) = aov {
+            pixels = vec![0; packets.len() * n];
+            for (i, p) in packets.iter().enumerate() {
+                for m in 0..n {
+                    if p.bits >> m & 1 != 0 {
+                        let px = a.pixel(p.xs[m], p.ys[m]);
+                        pixels[i * n + m] = px;
+                        a.sample(px);
+                    }
+                }
+            }
+        }
         // With beams, the camera packets' hits all at once, before anything else.
         let mut camera_hits: Vec<Hits<L>> = Vec::new();
         if self.packets == Packets::Beam && !packets.is_empty() {
@@ -75,8 +90,27 @@ impl<A: Accel> Renderer<'_, A> {
                 active.push(l.mask_from_bits(p.bits));
             }
             camera_hits = vec![Hits::miss(l); packets.len()];
-            self.accel
-                .intersect_beam(l, &rays, &active, &mut camera_hits);
+            if let Some(a) = aov {
+                let t0 = std::time::Instant::now();
+                let mut work = Work::default();
+                l.apart(
+                    #[inline(always)]
+                    |l| {
+                        self.accel.intersect_beam_work(
+                            l,
+                            &rays,
+                            &active,
+                            &mut camera_hits,
+                            &mut work,
+                        )
+                    },
+                );
+                charge_beam(a, &pixels, packets, n, work, t0.elapsed().as_nanos() as f64);
+                stats.work += work;
+            } else {
+                self.accel
+                    .intersect_beam(l, &rays, &active, &mut camera_hits);
+            }
             clock.lap(stats, Stage::Traversal);
         }
         // The hits of the camera packet about to be traced, when the beam found them.
@@ -111,6 +145,8 @@ impl<A: Accel> Renderer<'_, A> {
             } else {
                 break;
             };
+            let before = stats.work;
+            let t0 = aov.map(|_| std::time::Instant::now());
             self.segment(
                 l,
                 &seg,
@@ -119,6 +155,14 @@ impl<A: Accel> Renderer<'_, A> {
                 &mut children,
                 stats,
             );
+            if let (Some(a), Some(t0)) = (aov, t0) {
+                let ns = t0.elapsed().as_nanos() as f64;
+                let work = Work {
+                    inner_nodes: stats.work.inner_nodes - before.inner_nodes,
+                    tri_tests: stats.work.tri_tests - before.tri_tests,
+                };
+                charge(a, &pixels, seg.active, seg.slot, work, ns);
+            }
             if self.regroup {
                 file(&mut acc, seg.active, seg.slot, &radiance);
                 radiance = Rgbs::zero(l);
@@ -199,6 +243,58 @@ fn regroup<L: Lanes>(
     generation.clear();
     packed.reverse();
     ready.append(&mut packed);
+}
+
+/// Charges one segment's `work` and time `ns` to the pixels of its `active` lanes.
+#[inline(always)]
+fn charge<M: SimdMask, I: SimdI32>(
+    aov: &AovBuffer,
+    pixels: &[u32],
+    active: M,
+    slot: I,
+    work: Work,
+    ns: f64,
+) {
+    let mut slots = [0i32; MAX_LANES];
+    slot.store(&mut slots);
+    let mut px = [0u32; MAX_LANES];
+    let mut k = 0;
+    let mut bits = active.bitmask();
+    while bits != 0 {
+        let m = bits.trailing_zeros() as usize;
+        bits &= bits - 1;
+        px[k] = pixels[slots[m] as usize];
+        k += 1;
+    }
+    aov.charge_packet(&px[..k], work, ns);
+}
+
+/// Charges a camera beam's `work` to its packets in equal shares and its time `ns` to its
+/// rays in equal shares.
+fn charge_beam(
+    aov: &AovBuffer,
+    pixels: &[u32],
+    packets: &[PacketIn],
+    n: usize,
+    work: Work,
+    ns: f64,
+) {
+    let rays: u32 = packets.iter().map(|p| p.bits.count_ones()).sum();
+    let share = 1.0 / packets.len().max(1) as f64;
+    for (i, p) in packets.iter().enumerate() {
+        let lanes = p.bits.count_ones();
+        for m in 0..n {
+            if p.bits >> m & 1 != 0 {
+                aov.charge(
+                    pixels[i * n + m],
+                    work.inner_nodes as f64 * share,
+                    work.tri_tests as f64 * share,
+                    lanes,
+                    ns / f64::from(rays.max(1)),
+                );
+            }
+        }
+    }
 }
 
 /// Adds the `active` lanes of `radiance` to their samples (`slot`) in `acc`.

@@ -10,7 +10,33 @@
 //! Secondary packets keep the lanes of their parent packet unless the renderer's `regroup`
 //! switch is on: then the reflection and refraction lanes of a whole batch of packets are
 //! compacted into full packets (`batch.rs`).
+//!
+//! A frame from Rust, as `coherent render` makes it: a scene (a built-in scene's name, a scene
+//! file or a bare mesh), an accelerator chosen by name, the renderer, and the film on a lane
+//! backend chosen at run time. [`render_frame`] is not generic: it links the renderer compiled
+//! once per backend in this crate.
+//!
+//! ```
+//! use coherent::accel::Accel;
+//! use coherent::accel_any::{AccelKind, AnyAccel, AnyParams};
+//! use coherent::film::{FilmOptions, Method};
+//! use coherent::render::{Renderer, render_frame};
+//! use coherent::simd::Backend;
+//!
+//! let scene = coherent::scene::load("cornell")?;
+//! let accel = AnyAccel::build(&scene.accel_scene(), &AnyParams::of(AccelKind::Bsp))?;
+//! let (w, h) = (48, 36);
+//! let renderer = Renderer::new(&scene, accel, w, h)?;
+//! let opts = FilmOptions::new(w, h, Method::Uniform { spp: 1 });
+//! let frame = render_frame(Backend::widest(), &renderer, &opts, &|_| {})?;
+//! // Tone-mapped and clipped to [0, 1], row by row (`frame.write("out.png")` saves it).
+//! let image = frame.displayed(Backend::Scalar)?;
+//! assert_eq!(image.len(), (w * h) as usize);
+//! assert!(image.iter().any(|c| c.iter().any(|&v| v > 0.0)), "the box is lit");
+//! # Ok::<(), anyhow::Error>(())
+//! ```
 
+pub mod aov;
 mod batch;
 pub mod centres;
 pub mod light_samples;
@@ -29,6 +55,7 @@ use crate::material::{ShadeHits, Shading};
 use crate::scene::RenderScene;
 use crate::texture::lod_from_differentials;
 
+pub use aov::{AovBuffer, AovKind};
 pub use light_samples::LightSamples;
 pub use packets::Packets;
 use stats::StageClock;
@@ -60,6 +87,9 @@ pub struct Renderer<'s, A: Accel> {
     pub regroup: bool,
     /// How a tile's camera rays are traced: packet by packet, or together as one beam.
     pub packets: Packets,
+    /// Per-pixel maps of what the packets did (`aov.rs`; off by default: it reads the clock
+    /// per packet and counts the traversal's work).
+    pub aov: Option<std::sync::Arc<AovBuffer>>,
     /// The image's width in pixels (for [`LightSamples::Tile`]).
     width: u32,
 }
@@ -112,6 +142,7 @@ impl<'s, A: Accel> Renderer<'s, A> {
             light_samples: LightSamples::Pixel,
             regroup: false,
             packets: Packets::Lanes,
+            aov: None,
             width,
         })
     }
@@ -192,7 +223,8 @@ impl<'s, A: Accel> Renderer<'s, A> {
 
     /// Traces one packet: its hits (`traced`, when the beam query found them already) are
     /// shaded and lit into `radiance`, its reflection and refraction packets go to `pending`.
-    /// The light samples' random numbers derive from `seg.light_ids`.
+    /// The light samples' random numbers derive from `seg.light_ids`. With per-pixel maps on,
+    /// the queries add what they did to `stats.work`.
     #[inline(always)]
     fn segment<L: Lanes>(
         &self,
@@ -214,6 +246,15 @@ impl<'s, A: Accel> Renderer<'s, A> {
         let dir = seg.rays.dir;
         let hits = match traced {
             Some(h) => *h,
+            // Counted out of the kernel (`Lanes::apart`): a second traversal inlined into every
+            // backend's kernel more than doubled the library's build time.
+            None if self.aov.is_some() => l.apart(
+                #[inline(always)]
+                |l| {
+                    self.accel
+                        .intersect_work(l, &seg.rays, seg.active, &mut stats.work)
+                },
+            ),
             None => self.accel.intersect(l, &seg.rays, seg.active),
         };
         clock.lap(stats, Stage::Traversal);
@@ -288,7 +329,15 @@ impl<'s, A: Accel> Renderer<'s, A> {
                     let shadow = shadow_rays(l, &surf.p, &ns, &ls);
                     stats.count(RayKind::Shadow, on.count());
                     clock.lap(stats, Stage::Lights);
-                    let visible = on.and_not(self.accel.occluded(l, &shadow, on));
+                    let blocked = if self.aov.is_some() {
+                        l.apart(
+                            #[inline(always)]
+                            |l| self.accel.occluded_work(l, &shadow, on, &mut stats.work),
+                        )
+                    } else {
+                        self.accel.occluded(l, &shadow, on)
+                    };
+                    let visible = on.and_not(blocked);
                     clock.lap(stats, Stage::Shadows);
                     if visible.none() {
                         continue;

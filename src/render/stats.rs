@@ -171,6 +171,9 @@ pub struct RenderStats {
     pub stage_ns: [u64; Stage::COUNT],
     /// Laps of the stage clock charged to each [`Stage`].
     pub stage_laps: [u64; Stage::COUNT],
+    /// Traversal work, per packet (`coherent_accel::Work`); counted only while the renderer's
+    /// per-pixel maps are on, and by accelerators that count.
+    pub work: coherent_accel::Work,
 }
 
 impl RenderStats {
@@ -218,6 +221,7 @@ impl RenderStats {
         for (a, b) in self.stage_laps.iter_mut().zip(&o.stage_laps) {
             *a += b;
         }
+        self.work += o.work;
     }
 
     /// Seconds per [`Stage`], summed over threads, without the stage clock's own cost

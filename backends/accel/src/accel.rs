@@ -4,7 +4,7 @@
 
 use coherent_simd::{Lanes, SimdMask};
 
-use crate::{AccelError, Hit1, Hits, Instance, Ray1, Rays, Scene};
+use crate::{AccelError, Hit1, Hits, Instance, Ray1, Rays, Scene, Work};
 
 /// An acceleration structure over a [`Scene`] of instanced triangle meshes.
 ///
@@ -130,6 +130,51 @@ pub trait Accel: Send + Sync + Sized {
         for ((r, &m), o) in rays.iter().zip(active).zip(occluded.iter_mut()) {
             *o = self.occluded(l, r, m);
         }
+    }
+
+    /// Whether the `*_work` queries count what their traversal did. `false` (the default)
+    /// for structures whose traversal is not ours to count (Embree, obvhs): their `*_work`
+    /// queries answer as the plain ones and add nothing.
+    fn counts_work(&self) -> bool {
+        false
+    }
+
+    /// [`Accel::intersect`], adding what the traversal did to `work` (see
+    /// [`Accel::counts_work`]).
+    #[inline(always)]
+    fn intersect_work<L: Lanes>(
+        &self,
+        l: L,
+        rays: &Rays<L>,
+        active: L::Mask,
+        _work: &mut Work,
+    ) -> Hits<L> {
+        self.intersect(l, rays, active)
+    }
+
+    /// [`Accel::occluded`], adding what the traversal did to `work`.
+    #[inline(always)]
+    fn occluded_work<L: Lanes>(
+        &self,
+        l: L,
+        rays: &Rays<L>,
+        active: L::Mask,
+        _work: &mut Work,
+    ) -> L::Mask {
+        self.occluded(l, rays, active)
+    }
+
+    /// [`Accel::intersect_beam`], adding what the traversal did to `work`.
+    #[inline(always)]
+    fn intersect_beam_work<L: Lanes>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        hits: &mut [Hits<L>],
+        _work: &mut Work,
+    ) {
+        self.intersect_beam(l, rays, active, hits)
     }
 
     /// Every hit of every active lane, passed to `f(lane, hit)` with the guarantees of

@@ -24,6 +24,7 @@ pub mod scenes;
 pub mod shapes;
 pub mod testing;
 pub mod triangle;
+pub mod work;
 pub mod workload;
 
 pub use aabb::Aabb;
@@ -36,3 +37,4 @@ pub use packet::{Hits, Rays, Vec3s};
 pub use ray::{Hit1, Ray1, transform_point1, transform_vector1};
 pub use scene::Scene;
 pub use triangle::{ALL_EDGES, EDGE_EPS, MIN_THINNESS, TriAccel};
+pub use work::Work;

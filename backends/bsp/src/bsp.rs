@@ -4,7 +4,7 @@
 use std::time::Instant;
 
 use coherent_accel::{
-    Accel, AccelError, BuildStats, Hit1, Hits, Instance, Ray1, Rays, Scene, TriAccel,
+    Accel, AccelError, BuildStats, Hit1, Hits, Instance, Ray1, Rays, Scene, TriAccel, Work,
     scene::validate_instances,
 };
 use coherent_simd::Lanes;
@@ -409,6 +409,52 @@ impl Accel for Bsp {
     #[inline(always)]
     fn intersect<L: Lanes>(&self, l: L, rays: &Rays<L>, active: L::Mask) -> Hits<L> {
         self.first(l, rays, active, &mut ())
+    }
+
+    fn counts_work(&self) -> bool {
+        true
+    }
+
+    #[inline(always)]
+    fn intersect_work<L: Lanes>(
+        &self,
+        l: L,
+        rays: &Rays<L>,
+        active: L::Mask,
+        work: &mut Work,
+    ) -> Hits<L> {
+        let mut c = TraversalStats::default();
+        let h = self.first(l, rays, active, &mut c);
+        *work += c.work();
+        h
+    }
+
+    #[inline(always)]
+    fn occluded_work<L: Lanes>(
+        &self,
+        l: L,
+        rays: &Rays<L>,
+        active: L::Mask,
+        work: &mut Work,
+    ) -> L::Mask {
+        let mut c = TraversalStats::default();
+        let o = self.any(l, rays, active, &mut c);
+        *work += c.work();
+        o
+    }
+
+    #[inline(always)]
+    fn intersect_beam_work<L: Lanes>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        hits: &mut [Hits<L>],
+        work: &mut Work,
+    ) {
+        let mut c = TraversalStats::default();
+        self.first_beam(l, rays, active, hits, &mut c);
+        *work += c.work();
     }
 
     #[inline(always)]

@@ -67,6 +67,15 @@ impl TraversalStats {
         }
     }
 
+    /// The interface's per-packet work: inner nodes (a beam's shared steps included) and
+    /// triangle tests.
+    pub fn work(&self) -> coherent_accel::Work {
+        coherent_accel::Work {
+            inner_nodes: self.inner_nodes + self.beam_steps,
+            tri_tests: self.tri_tests,
+        }
+    }
+
     /// Mean active lanes per packet triangle test.
     pub fn lanes_per_test(&self) -> f64 {
         if self.tri_tests == 0 {

@@ -115,6 +115,19 @@ impl Lanes for Avx2 {
         M32x8(unsafe { _mm256_castsi256_ps(_mm256_set1_epi32(-(b as i32))) })
     }
     #[inline(always)]
+    fn apart<R>(self, f: impl FnOnce(Self) -> R) -> R {
+        // Out of line, then inside the token's `#[target_feature]` entry point.
+        #[inline(never)]
+        fn go<R, F: FnOnce(Avx2) -> R>(l: Avx2, f: F) -> R {
+            l.simd().vectorize(
+                #[inline(always)]
+                move || f(l),
+            )
+        }
+        go(self, f)
+    }
+
+    #[inline(always)]
     fn lane_ids(self) -> I32x8 {
         I32x8(unsafe { _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7) })
     }

@@ -112,6 +112,19 @@ impl Lanes for Avx512 {
         M16(if b { 0xffff } else { 0 })
     }
     #[inline(always)]
+    fn apart<R>(self, f: impl FnOnce(Self) -> R) -> R {
+        // Out of line, then inside the token's `#[target_feature]` entry point.
+        #[inline(never)]
+        fn go<R, F: FnOnce(Avx512) -> R>(l: Avx512, f: F) -> R {
+            l.simd().vectorize(
+                #[inline(always)]
+                move || f(l),
+            )
+        }
+        go(self, f)
+    }
+
+    #[inline(always)]
     fn lane_ids(self) -> I32x16 {
         I32x16(unsafe { _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15) })
     }

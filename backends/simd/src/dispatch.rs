@@ -581,6 +581,27 @@ mod tests {
         }
     }
 
+    /// Sums lane ids inside the kernel and apart from it (`Lanes::apart`).
+    struct Apart;
+    impl Kernel for Apart {
+        type Output = (i32, i32);
+        fn run<L: Lanes>(self, l: L) -> (i32, i32) {
+            use crate::SimdI32;
+            let sum = |v: L::I32s| (0..L::N).map(|i| v.lane(i)).sum::<i32>();
+            let inside = sum(l.lane_ids() + l.splat_i32(1));
+            let apart = l.apart(|l| sum(l.lane_ids() + l.splat_i32(1)));
+            (inside, apart)
+        }
+    }
+
+    #[test]
+    fn apart_runs_on_the_same_lanes() {
+        for b in Backend::available() {
+            let n = b.lanes() as i32;
+            assert_eq!(b.run(Apart), Ok((n * (n + 1) / 2, n * (n + 1) / 2)), "{b}");
+        }
+    }
+
     struct NotOptedIn;
     impl Kernel for NotOptedIn {
         type Output = ();

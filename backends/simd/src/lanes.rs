@@ -117,6 +117,18 @@ pub trait Lanes: Copy + Debug + Send + Sync + 'static {
         third.select(up, down)
     }
 
+    /// `f(self)` in a function of its own, compiled for this backend's instruction set
+    /// (inside its `#[target_feature]` entry point, as [`crate::Backend::run`] runs kernels).
+    /// For code a kernel runs rarely (per-pixel diagnostics) that must neither be inlined into
+    /// the kernel (a kernel is one function, and LLVM optimises a function in time
+    /// superlinear in its size) nor be compiled without the backend's instructions (each
+    /// vector operation would become a call). The default: a function without target
+    /// features, for backends whose instructions are the target's baseline.
+    #[inline(always)]
+    fn apart<R>(self, f: impl FnOnce(Self) -> R) -> R {
+        apart_plain(self, f)
+    }
+
     /// Lanes from a function of the lane index (packing, tests; not for hot loops).
     #[inline(always)]
     #[allow(clippy::wrong_self_convention)] // a token method: the token proves the backend
@@ -326,4 +338,10 @@ pub trait SimdMask:
     }
     /// `self & !o`.
     fn and_not(self, o: Self) -> Self;
+}
+
+/// [`Lanes::apart`] for the backends of the target's baseline instructions.
+#[inline(never)]
+fn apart_plain<L: Lanes, R, F: FnOnce(L) -> R>(l: L, f: F) -> R {
+    f(l)
 }

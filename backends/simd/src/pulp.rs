@@ -139,6 +139,17 @@ impl<K: crate::Kernel> pulp::WithSimd for WithKernel<K> {
     }
 }
 
+/// Runs a closure on given lanes inside pulp's entry point ([`Lanes::apart`]).
+struct Apart<L, F>(L, F);
+
+impl<S: Simd, R, F: FnOnce(PulpLanes<S>) -> R> pulp::WithSimd for Apart<PulpLanes<S>, F> {
+    type Output = R;
+    #[inline(always)]
+    fn with_simd<S2: Simd>(self, _simd: S2) -> R {
+        (self.1)(self.0)
+    }
+}
+
 /// `f32` lanes.
 #[derive(Clone, Copy)]
 pub struct PF32<S: Simd>(S::f32s, S);
@@ -313,6 +324,16 @@ impl<S: Simd> Lanes for PulpLanes<S> {
         let s = self.0;
         PM32(s.equal_u32s(s.splat_u32s(0), s.splat_u32s(!b as u32)), s)
     }
+    #[inline(always)]
+    fn apart<R>(self, f: impl FnOnce(Self) -> R) -> R {
+        // Out of line, then inside the token's `#[target_feature]` entry point.
+        #[inline(never)]
+        fn go<S: Simd, R, F: FnOnce(PulpLanes<S>) -> R>(l: PulpLanes<S>, f: F) -> R {
+            pulp::Simd::vectorize(l.0, Apart(l, f))
+        }
+        go(self, f)
+    }
+
     #[inline(always)]
     fn lane_ids(self) -> PI32<S> {
         self.load_i32(&IOTA)
