@@ -3,11 +3,13 @@
 # aarch64-unknown-linux-gnu with Debian's Rust and runs its tests under qemu's user-mode
 # emulator. Needs root and apt (a Debian bookworm system, as the native set-up does).
 #
-# Usage: scripts/cross-test.sh [--all] [--reproduce] [extra cargo test arguments]
+# Usage: scripts/cross-test.sh [--lanes|--all] [--reproduce] [extra cargo test arguments]
 #   (default) the crates below the renderer, whole (about 8 minutes from a clean tree): the
 #             lane trait bit for bit on every aarch64 backend (backends/simd/tests/lanes.rs),
 #             the approximations' error bounds, the traversal interface and the two-level BSP
 #             against brute force (packets and builds; beams and watertightness with --all);
+#   --lanes   only the lane crate's tests (coherent-simd: the lane trait bit for bit on every
+#             aarch64 backend, the approximations' error bounds, dispatch): what CI runs;
 #   --all     the whole workspace: the renderer against closed forms, renders per backend and
 #             accelerator, obvhs, the `coherent` and `reproduce` command lines (the build
 #             takes about 25 minutes on 2 cores, the tests about 8 under emulation);
@@ -23,11 +25,13 @@ cd "$(dirname "$0")/.."
 
 target=aarch64-unknown-linux-gnu
 all=0
+lanes=0
 reproduce=0
 args=()
 for a in "$@"; do
     case "$a" in
         --all) all=1 ;;
+        --lanes) lanes=1 ;;
         --reproduce) reproduce=1 ;;
         *) args+=("$a") ;;
     esac
@@ -85,7 +89,9 @@ echo "cross-test.sh: skipped: the coherent-embree crate's tests and every test n
 skip=(--skip embree)
 # Libraries and test targets (not the examples: clippy checks that they compile).
 targets=(--lib --bins --tests)
-if ((all)); then
+if ((lanes)); then
+    cargo test --target "$target" -p coherent-simd --lib --tests "${args[@]}" -- "${skip[@]}"
+elif ((all)); then
     cargo test --target "$target" --workspace --exclude coherent-embree "${targets[@]}" \
         "${args[@]}" -- "${skip[@]}"
 else

@@ -396,6 +396,35 @@ fn portability_plots(ctx: &Ctx, t: &crate::Table) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Which instruction set each backend of the run was built for, and what it ran on
+/// (`machine.json`: the target, the CPU, and the emulator when there was one).
+fn instruction_sets(ctx: &Ctx, t: &crate::Table) -> anyhow::Result<String> {
+    let text = std::fs::read_to_string(ctx.path("machine.json")).unwrap_or_default();
+    let machine = coherent::machine::Machine::from_json(&text).ok();
+    // The host of this experiment's run (`runs`), else the last run's.
+    let run = crate::machine_keys::runs(&text)
+        .into_iter()
+        .find(|r| r.experiment == EXPERIMENT.name);
+    let ran_on = match (&machine, run.and_then(|r| r.cpu.zip(r.os))) {
+        (Some(m), _) if m.is_emulated() => {
+            format!("{} under emulation ({})", m.arch, m.emulated)
+        }
+        (_, Some((cpu, os))) => format!("{cpu} ({os})"),
+        (Some(m), None) => format!("{} ({})", m.cpu, m.os),
+        (None, None) => "(no machine.json)".to_owned(),
+    };
+    let mut rows = Vec::new();
+    for name in t.distinct("backend")? {
+        let isa =
+            Backend::named(&name).map_or("(not a backend of this build)", |b| b.instructions());
+        rows.push(vec![name, isa.to_owned(), ran_on.clone()]);
+    }
+    Ok(format!(
+        "Built for and run on (the instruction sets as this build compiles each backend):\n\n{}\n",
+        markdown_table(&["backend", "instruction set", "ran on"], &rows)
+    ))
+}
+
 /// The portability table: per kernel and width, the speedups and pulp's and wide's time
 /// over the hand-written backend's (in one build; the native build's columns where present).
 fn portability_report(ctx: &Ctx, t: &crate::Table) -> anyhow::Result<String> {
@@ -406,6 +435,7 @@ fn portability_report(ctx: &Ctx, t: &crate::Table) -> anyhow::Result<String> {
 
 "
     );
+    md.push_str(&instruction_sets(ctx, t)?);
     let manycore = ctx.read_csv(MANYCORE_FILE, HEADER).ok().flatten();
     if manycore.is_some() {
         md.push_str(&format!(

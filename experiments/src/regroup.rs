@@ -6,7 +6,7 @@
 //! packets, at the cost of copying them out and back.
 //!
 //! Protocol: the scenes and frames of `table3` (same plan) that trace reflection or
-//! refraction rays, the BSP, the hand-written backends of 4, 8 and 16 lanes usable here.
+//! refraction rays, the BSP, the preferred backend of 4, 8 and 16 lanes usable here (hand-written on x86-64).
 //! Per scene and backend, one untimed frame each way (the images, compared by PSNR as
 //! displayed: tone-mapped, channels clipped to [0, 1]; and the packet counts), then
 //! [`ROUNDS`] rounds alternate the two (which goes first alternates too); `seconds` is the
@@ -58,16 +58,17 @@ const HEADER: &[&str] = &[
 /// Timed rounds per scene and backend, each way.
 const ROUNDS: usize = 5;
 
-/// The backends compared: the hand-written ones of each width.
-const BACKENDS: [Backend; 3] = [Backend::Sse, Backend::Avx2, Backend::Avx512];
+/// The packet widths compared, each on its preferred backend usable here
+/// ([`Backend::preferred_for_lanes`]: the hand-written one on x86-64, pulp4 or wide on aarch64).
+const WIDTHS: [usize; 3] = [4, 8, 16];
 
 fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     let plan = crate::table3::plan(ctx);
     let mut backends = Vec::new();
-    for b in BACKENDS {
-        match b.unavailable_reason() {
-            None => backends.push(b),
-            Some(why) => ctx.note(format!("regroup: backend {b} skipped: {why}")),
+    for n in WIDTHS {
+        match Backend::preferred_for_lanes(n) {
+            Some(b) => backends.push(b),
+            None => ctx.note(format!("regroup: no {n}-lane backend usable here")),
         }
     }
     if backends.is_empty() {
@@ -254,7 +255,7 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     };
     let mut md = format!(
         "The frames of `table3` that trace reflection or refraction rays (same scenes, size \
-         and samples; BSP; one thread), each hand-written backend with the renderer's \
+         and samples; BSP; one thread), each width's preferred backend with the renderer's \
          secondary packets as they come (`off`: a packet keeps its parent's lanes, as in the \
          paper) and regrouped (`on`: per node of the ray tree, the partial packets of a film \
          tile compacted into full packets; full ones pass as they are). One untimed frame each way gives the \

@@ -215,6 +215,33 @@ impl Backend {
         Backend::every().find(|b| b.name() == name)
     }
 
+    /// The instruction set the backend's code is compiled for, in this build.
+    pub fn instructions(self) -> &'static str {
+        let arm = cfg!(target_arch = "aarch64");
+        match self {
+            Backend::Scalar if arm => "A64 scalar floating point",
+            Backend::Scalar => "SSE2 scalar (the x86-64 baseline)",
+            Backend::ScalarEst => "SSE scalar, with rsqrtss/rcpss estimates",
+            Backend::Sse => "SSE2 (the x86-64 baseline)",
+            Backend::Wide4 | Backend::Wide8 | Backend::Wide16 => {
+                if arm {
+                    "NEON (wide's aarch64 paths)"
+                } else if cfg!(target_feature = "avx512f") {
+                    "the build's target features: AVX-512"
+                } else if cfg!(target_feature = "avx2") {
+                    "the build's target features: AVX2"
+                } else {
+                    "the build's target features: SSE2 (the x86-64 baseline)"
+                }
+            }
+            Backend::Avx2 => "AVX2 + FMA (pulp's V3 entry point)",
+            Backend::Pulp8 => "AVX2 + FMA (pulp V3)",
+            Backend::Avx512 => "AVX-512 F/BW/CD/DQ/VL (pulp's V4 entry point)",
+            Backend::Pulp16 => "AVX-512 F/BW/CD/DQ/VL (pulp V4)",
+            Backend::Pulp4 => "NEON (pulp Neon)",
+        }
+    }
+
     /// The cargo feature that compiles the backend in (`scalar` has none).
     pub fn feature(self) -> &'static str {
         match self {
@@ -628,6 +655,10 @@ mod tests {
         assert_eq!(Backend::Pulp4.family(), "pulp");
         let hand: Vec<&str> = Backend::hand_written().map(Backend::name).collect();
         assert_eq!(hand, ["scalar", "sse", "avx2", "avx512"]);
+        for b in Backend::every() {
+            assert!(!b.instructions().is_empty(), "{b}");
+        }
+        assert!(Backend::Pulp4.instructions().contains("NEON"));
     }
 
     #[test]
