@@ -139,11 +139,18 @@ impl AovBuffer {
     /// One segment's charge to one of its lanes at `pixel`: the segment's `work` (or its
     /// share of a beam's), the packet's `lanes` and the lane's share `ns` of the time.
     pub fn charge(&self, pixel: u32, steps: f64, tests: f64, lanes: u32, ns: f64) {
+        self.charge_work(pixel, steps, tests, ns);
+        let s = &self.sums[pixel as usize];
+        add(&s[LANES], f64::from(lanes));
+        add(&s[SEGMENTS], 1.0);
+    }
+
+    /// Work and time without a segment of its own: a camera beam's share, charged before its
+    /// packets are shaded as segments (which count their lanes then).
+    pub fn charge_work(&self, pixel: u32, steps: f64, tests: f64, ns: f64) {
         let s = &self.sums[pixel as usize];
         add(&s[STEPS], steps);
         add(&s[TESTS], tests);
-        add(&s[LANES], f64::from(lanes));
-        add(&s[SEGMENTS], 1.0);
         add(&s[TIME], ns);
     }
 

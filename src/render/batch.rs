@@ -270,7 +270,7 @@ fn charge<M: SimdMask, I: SimdI32>(
 }
 
 /// Charges a camera beam's `work` to its packets in equal shares and its time `ns` to its
-/// rays in equal shares.
+/// rays in equal shares (the packets' lanes count when they are shaded, as segments).
 fn charge_beam(
     aov: &AovBuffer,
     pixels: &[u32],
@@ -282,14 +282,12 @@ fn charge_beam(
     let rays: u32 = packets.iter().map(|p| p.bits.count_ones()).sum();
     let share = 1.0 / packets.len().max(1) as f64;
     for (i, p) in packets.iter().enumerate() {
-        let lanes = p.bits.count_ones();
         for m in 0..n {
             if p.bits >> m & 1 != 0 {
-                aov.charge(
+                aov.charge_work(
                     pixels[i * n + m],
                     work.inner_nodes as f64 * share,
                     work.tri_tests as f64 * share,
-                    lanes,
                     ns / f64::from(rays.max(1)),
                 );
             }
