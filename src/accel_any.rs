@@ -58,6 +58,18 @@ impl AccelKind {
         }
     }
 
+    /// The accelerators experiments and benches compare: every one but brute force, the
+    /// tests' reference.
+    pub fn compared() -> impl Iterator<Item = AccelKind> {
+        Self::ALL.into_iter().filter(|&k| k != AccelKind::Brute)
+    }
+
+    /// Whether it traverses packets itself. obvhs answers a packet lane by lane, so timing
+    /// its packets would time that loop.
+    pub fn has_packets(self) -> bool {
+        self != AccelKind::Obvhs
+    }
+
     /// Whether this build has it.
     pub fn compiled(self) -> bool {
         match self {
@@ -145,6 +157,32 @@ impl AnyParams {
             ..Self::default()
         }
     }
+
+    /// The parameters the experiments time `kind` with: its defaults, less what only
+    /// all-hits queries need (Embree's filter-function scene flag), and `threads` build
+    /// threads for a structure that takes a count (Embree; the others build in the caller's
+    /// rayon pool).
+    pub fn timed(kind: AccelKind, threads: usize) -> Self {
+        let p = Self::of(kind);
+        #[cfg(feature = "embree")]
+        let p = Self {
+            embree: coherent_embree::EmbreeParams {
+                all_hits: false,
+                threads: Some(threads),
+                ..p.embree
+            },
+            ..p
+        };
+        let _ = threads;
+        p
+    }
+}
+
+/// Work done on the concrete accelerator inside an [`AnyAccel`] ([`AnyAccel::visit`]): a
+/// timed loop over queries then runs without the enum's `match` per query.
+pub trait AccelVisitor {
+    type Output;
+    fn visit<A: Accel>(self, accel: &A) -> Self::Output;
 }
 
 /// A built accelerator of any kind.
@@ -178,6 +216,11 @@ impl AnyAccel {
     pub fn build_named(scene: &Scene, name: &str) -> Result<Self, AnyBuildError> {
         let kind: AccelKind = name.parse()?;
         Ok(Self::build(scene, &AnyParams::of(kind))?)
+    }
+
+    /// Runs `v` on the concrete accelerator.
+    pub fn visit<V: AccelVisitor>(&self, v: V) -> V::Output {
+        dispatch!(self, a => v.visit(a))
     }
 
     /// Which accelerator this is.

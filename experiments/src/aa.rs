@@ -6,21 +6,26 @@
 //! same quality; the target here: adaptive reaches uniform's final RMSE with at least 2x
 //! fewer rays.
 //!
-//! The integrator is a small stand-in (camera rays through the BSP, Lambert surfaces, one
-//! point light with shadow rays): the film only needs radiance per sample. The renderer's
-//! packet pipeline, which implements the same `SampleTracer`, may replace it.
+//! The renderer itself traces the samples (`coherent::render::Renderer` on the BSP, camera
+//! rays and the shadow rays of one omni light): the generated `room` test scene (boxes with
+//! sharp edges inside smooth walls) as a render scene with matte surfaces.
 
 use std::sync::Mutex;
 use std::time::Instant;
 
-use coherent::accel::scenes::{self, SceneSize, View};
-use coherent::accel::{Accel, Rays, Scene};
-use coherent::bsp::{Bsp, BspParams};
-use coherent::film::{self, FilmOptions, Method, PassRecord, PassReport, SampleTracer};
+use coherent::accel::Accel;
+use coherent::accel_any::{AccelKind, AnyAccel, AnyParams};
+use coherent::film::{self, FilmOptions, Method, PassRecord, PassReport};
+use coherent::light::{Light, Omni};
+use coherent::material::Material;
+use coherent::render::{RenderStats, Renderer, render_frame};
 use coherent::sampler::HaltonTile;
-use coherent::simd::{Backend, Lanes, MAX_LANES, Rgbs, SimdF32, SimdMask};
+use coherent::scene::RenderScene;
+use coherent::scene::camera::Camera;
+use coherent::scene::shaded::ShadedMesh;
+use coherent::simd::Backend;
 use coherent::tonemap::ToneMap;
-use glam::Vec3;
+use coherent_accel::scenes::{self, SceneSize};
 
 use crate::ctx::Ctx;
 use crate::experiment::{Experiment, Status};
@@ -59,109 +64,41 @@ const GROUPS_HEADER: &[&str] = &[
     "rays",
 ];
 
-/// Camera rays, Lambert surfaces (albedo 0.7) and one point light with shadow rays, over
-/// the BSP. Stats: shadow rays traced.
-pub struct LambertTracer {
-    bsp: Bsp,
-    scene: Scene,
-    view: View,
-    light: Vec3,
-    intensity: f32,
-    width: f32,
-    height: f32,
-}
-
-impl LambertTracer {
-    pub fn new(s: scenes::BuiltinScene, width: u32, height: u32) -> anyhow::Result<Self> {
-        let bsp = Bsp::build(&s.scene, &BspParams::default())?;
-        Ok(LambertTracer {
-            bsp,
-            scene: s.scene,
-            view: s.view,
-            light: s.light,
-            intensity: 20.0,
-            width: width as f32,
-            height: height as f32,
-        })
-    }
-
-    /// Radiance of a hit: Lambert under the point light, shadowed, plus a little ambient.
-    fn shade(
-        &self,
-        ray_o: Vec3,
-        ray_d: Vec3,
-        hit: coherent::accel::Hit1,
-        shadows: &mut u64,
-    ) -> [f32; 3] {
-        let inst = &self.scene.instances[hit.inst as usize];
-        let [a, b, c] = self.scene.meshes[inst.mesh].triangle(hit.prim as usize);
-        let m = inst.world_from_object;
-        let (a, b, c) = (
-            m.transform_point3(a),
-            m.transform_point3(b),
-            m.transform_point3(c),
-        );
-        let mut n = (b - a).cross(c - a).normalize_or_zero();
-        if n.dot(ray_d) > 0.0 {
-            n = -n;
-        }
-        let p = ray_o + ray_d * hit.t;
-        let to_light = self.light - p;
-        let dist2 = to_light.length_squared();
-        let wi = to_light / dist2.sqrt();
-        let cos = n.dot(wi);
-        let albedo = [0.7, 0.65, 0.55];
-        let ambient = 0.03;
-        let mut direct = 0.0;
-        if cos > 0.0 {
-            *shadows += 1;
-            let shadow = coherent::accel::Ray1::new(p + n * 1e-3, to_light, 0.0, 1.0 - 1e-4);
-            if !self.bsp.occluded1(&shadow) {
-                direct = self.intensity * cos / dist2 / core::f32::consts::PI;
-            }
-        }
-        let e = direct + ambient;
-        [albedo[0] * e, albedo[1] * e, albedo[2] * e]
-    }
-}
-
-impl SampleTracer for LambertTracer {
-    type Stats = u64;
-    fn merge_stats(into: &mut u64, from: u64) {
-        *into += from;
-    }
-    #[inline(always)]
-    fn trace<L: Lanes>(
-        &self,
-        l: L,
-        xs: L::F32s,
-        ys: L::F32s,
-        _ids: L::I32s,
-        active: L::Mask,
-        stats: &mut u64,
-    ) -> Rgbs<L> {
-        let aspect = self.width / self.height;
-        let rays = Rays::from_fn(l, |i| {
-            self.view
-                .ray_at(xs.lane(i) / self.width, ys.lane(i) / self.height, aspect)
-        });
-        let hits = self.bsp.intersect(l, &rays, active);
-        let mut c = [[0.0f32; 3]; MAX_LANES];
-        for (i, ci) in c.iter_mut().enumerate().take(L::N) {
-            if !active.lane(i) {
-                continue;
-            }
-            if let Some(h) = hits.lane(i) {
-                let r = rays.lane(i);
-                *ci = self.shade(r.origin, r.dir, h, stats);
-            }
-        }
-        Rgbs::new(
-            l.from_fn(|i| c[i][0]),
-            l.from_fn(|i| c[i][1]),
-            l.from_fn(|i| c[i][2]),
-        )
-    }
+/// The generated room (`coherent_accel::scenes::room`) as the renderer's scene: every mesh
+/// matte (albedo 0.7, 0.65, 0.55, a little ambient), one omni light where the test scene
+/// puts its light, camera and shadow rays only (depth 0).
+fn aa_scene(size: SceneSize, width: u32, height: u32) -> anyhow::Result<RenderScene> {
+    let s = scenes::room(size);
+    let mut matte = Material::phong("matte", [0.7, 0.65, 0.55], [0.0; 3], 1.0);
+    matte.phong.ambient = [0.02; 3];
+    let scene = RenderScene {
+        name: s.name.to_owned(),
+        meshes: s
+            .scene
+            .meshes
+            .into_iter()
+            .map(|m| ShadedMesh::flat(m, 0))
+            .collect(),
+        instances: s.scene.instances,
+        materials: vec![matte],
+        lights: vec![Light::Omni(Omni::new(s.light, [20.0; 3])?)],
+        camera: Camera {
+            position: s.view.eye,
+            look_at: s.view.target,
+            up: s.view.up,
+            vfov_deg: s.view.fov_y_degrees,
+        },
+        width,
+        height,
+        depth: 0,
+        spp: None,
+        accuracy: None,
+        tonemap: Default::default(),
+        background: [0.0; 3],
+        motion: Vec::new(),
+    };
+    scene.validate()?;
+    Ok(scene)
 }
 
 /// RMSE of the display values (both images tone-mapped with the reference's operator and
@@ -184,12 +121,12 @@ type Passes = Vec<(PassRecord, f64, Vec<[f32; 3]>)>;
 /// Renders and records every pass.
 fn passes(
     backend: Backend,
-    tracer: &LambertTracer,
+    renderer: &Renderer<'_, AnyAccel>,
     opts: &FilmOptions,
-) -> anyhow::Result<(Passes, film::Rendered<u64>)> {
+) -> anyhow::Result<(Passes, film::Rendered<RenderStats>)> {
     // The callback's own time (copying the image) is left out of the pass times.
     let spent = Mutex::new((0.0f64, Vec::new()));
-    let r = film::render(backend, tracer, opts, &|p: &PassReport| {
+    let r = render_frame(backend, renderer, opts, &|p: &PassReport| {
         let t = Instant::now();
         let mut g = spent.lock().unwrap();
         let img = p.film.estimate();
@@ -203,7 +140,9 @@ fn passes(
 fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     let (w, h) = ctx.pick((120, 90), (320, 240));
     let size = ctx.pick(SceneSize::Quick, SceneSize::Full);
-    let tracer = LambertTracer::new(scenes::room(size), w, h)?;
+    let scene = aa_scene(size, w, h)?;
+    let accel = AnyAccel::build(&scene.accel_scene(), &AnyParams::of(AccelKind::Bsp))?;
+    let renderer = Renderer::new(&scene, accel, w, h)?;
     // The paper's 4-lane packets where the CPU has them.
     let backend = Backend::preferred_for_lanes(4).unwrap_or(Backend::Scalar);
     let ref_spp = ctx.pick(64, 256);
@@ -213,7 +152,7 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     // The reference: many more samples, from another Halton tile (other positions).
     let mut ref_opts = FilmOptions::new(w, h, Method::Uniform { spp: ref_spp });
     ref_opts.tile = HaltonTile::new(3, 3);
-    let reference = film::render(backend, &tracer, &ref_opts, &|_| {})?;
+    let reference = render_frame(backend, &renderer, &ref_opts, &|_| {})?;
     let display = reference.tonemap;
     let reference = reference.image();
     bar.inc(1);
@@ -238,7 +177,7 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     }
     for (name, method, accuracy) in methods {
         let opts = FilmOptions::new(w, h, method);
-        let (records, rendered) = passes(backend, &tracer, &opts)?;
+        let (records, rendered) = passes(backend, &renderer, &opts)?;
         for (rec, seconds, img) in &records {
             csv.row(&[
                 &name,
@@ -351,8 +290,8 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     };
     let mut md = String::new();
     md.push_str(
-        "The room scene (edges, smooth walls, shadows) through a small Lambert + point-light \
-         tracer over the BSP, 4-lane packets. `uniform`: Halton supersampling, one pass per \
+        "The room scene (edges, smooth walls, shadows) rendered by the renderer itself: matte \
+         surfaces, one omni light with shadow rays, the BSP, 4-lane packets. `uniform`: Halton supersampling, one pass per \
          sample per pixel; `adaptive A`: the paper's superpixels (8 x 6, interpolated where \
          their corners agree within A), then Halton groups of growing span, a pixel stopping \
          when its two screen matrices agree within A (display units, 0-1) over its 3x3 neighbourhood \

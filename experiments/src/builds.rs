@@ -12,11 +12,12 @@
 //! of the widest backend), interleaved, one thread, and checks that they give the same
 //! answers.
 
-use coherent::accel::scenes::{BuiltinScene, SceneSize};
-use coherent::accel::workload::RayKind;
 use coherent::accel::{Accel, AccelError};
+use coherent::accel_any::{AccelKind, AnyAccel, AnyParams};
 use coherent::bsp::{Bsp, BspParams, BuildPreset};
 use coherent::simd::Backend;
+use coherent_accel::scenes::{BuiltinScene, SceneSize};
+use coherent_accel::workload::RayKind;
 
 use crate::accel::{disagreement, interleaved, pass_any, rays, scene_list};
 use crate::ctx::Ctx;
@@ -221,39 +222,28 @@ fn run_scene(
     Ok(())
 }
 
-/// Embree's and obvhs's build rows for `s`, on one thread and every core; one that cannot
-/// be built here is noted and left out.
-#[cfg_attr(
-    not(any(feature = "embree", feature = "obvhs")),
-    allow(unused_variables)
-)]
+/// The build rows of every compared structure but the BSP for `s` (Embree, obvhs), on one
+/// thread and every core; one that cannot be built here is noted and left out.
 fn others(ctx: &mut Ctx, s: &BuiltinScene, repeats: usize, out: &mut CsvOut) -> anyhow::Result<()> {
-    for threads in thread_counts() {
-        #[cfg(feature = "embree")]
-        {
-            let params = coherent::embree::EmbreeParams {
-                threads: Some(threads),
-                ..crate::accel::embree_params()
-            };
-            match timed(threads, repeats, || {
-                coherent::embree::Embree::build(&s.scene, &params)
-            }) {
-                Ok((e, secs)) => other_row(out, s, "embree", threads, &e, secs)?,
-                Err(e) => ctx.note(format!("builds: embree left out of {}: {e}", s.name)),
-            }
+    let mut kinds = Vec::new();
+    for kind in AccelKind::compared().filter(|&k| k != AccelKind::Bsp) {
+        match kind.unavailable_reason() {
+            None => kinds.push(kind),
+            Some(why) => ctx.note(format!("builds: {kind} left out of {}: {why}", s.name)),
         }
-        #[cfg(feature = "obvhs")]
-        {
-            let (o, secs) = timed(threads, repeats, || {
-                coherent::obvhs::Obvhs::build(&s.scene, &Default::default())
-            })?;
-            other_row(out, s, "obvhs", threads, &o, secs)?;
+    }
+    for threads in thread_counts() {
+        for &kind in &kinds {
+            let params = AnyParams::timed(kind, threads);
+            match timed(threads, repeats, || AnyAccel::build(&s.scene, &params)) {
+                Ok((a, secs)) => other_row(out, s, kind.name(), threads, &a, secs)?,
+                Err(e) => ctx.note(format!("builds: {kind} left out of {}: {e}", s.name)),
+            }
         }
     }
     Ok(())
 }
 
-#[cfg_attr(not(any(feature = "embree", feature = "obvhs")), allow(dead_code))]
 fn other_row(
     out: &mut CsvOut,
     s: &BuiltinScene,

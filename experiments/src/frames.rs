@@ -116,7 +116,7 @@ pub fn load_or_note(
 pub fn accels() -> (Vec<AccelKind>, Vec<(String, String)>) {
     let mut ok = Vec::new();
     let mut skipped = Vec::new();
-    for k in [AccelKind::Bsp, AccelKind::Embree, AccelKind::Obvhs] {
+    for k in AccelKind::compared() {
         match k.unavailable_reason() {
             None => ok.push(k),
             Some(why) => skipped.push((format!("accel {k}"), why)),

@@ -72,65 +72,36 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     }
     let passes = ctx.pick(8, 64);
     let samples = ctx.pick(5, 15);
-    let kernels = Approx::TIMED;
-
-    let bar = ctx.progress((kernels.len() * samples) as u64, "kernels");
-    let mut seconds: BTreeMap<(Approx, Backend), Vec<f64>> = BTreeMap::new();
-    for f in kernels {
-        let (a, b) = approx_inputs(f, VALUES);
-        let mut out = vec![0.0f32; a.len()];
-        let mut sample = |backend: Backend| -> anyhow::Result<f64> {
-            let start = std::time::Instant::now();
-            for _ in 0..passes {
-                backend.run(ApproxKernel {
-                    f,
-                    a: &a,
-                    b: &b,
-                    out: &mut out,
-                })?;
-            }
-            Ok(start.elapsed().as_secs_f64())
-        };
-        for &backend in &backends {
-            sample(backend)?; // warm-up
-        }
-        for _ in 0..samples {
-            for &backend in &backends {
-                let s = sample(backend)?;
-                seconds.entry((f, backend)).or_default().push(s);
-            }
-            bar.inc(1);
-        }
+    let bar = ctx.progress((Approx::TIMED.len() * samples) as u64, "kernels");
+    let timing = Timing {
+        backends: &backends,
+        samples,
+        bar: &bar,
+    };
+    // Every kernel's samples per backend, with the scale to seconds per `PER` evaluations.
+    let mut timed: Vec<(String, Samples, f64)> = Vec::new();
+    let scale = PER / (passes * VALUES) as f64;
+    for f in Approx::TIMED {
+        let s = timing.approximation(f, passes)?;
+        timed.push((f.name().to_owned(), s, scale));
     }
     // The texture kernel (section 4.1): trilinear lookups of a 1024 x 1024 mipmapped texture
     // from a floor seen by a pinhole camera, the mip level by successive halving (the
     // paper's) or from ray differentials.
     let texture = pattern_texture(1024);
     let tex_inputs = TextureInputs::floor(ctx.pick(256, 512), 1024);
-    let mut tex_seconds: BTreeMap<(LodMethod, Backend), Vec<f64>> = BTreeMap::new();
-    for (method, _) in TEXTURE_KERNELS {
-        let tex_sample = |backend: Backend| -> anyhow::Result<f64> {
-            let start = std::time::Instant::now();
-            std::hint::black_box(backend.run(TextureLookups {
+    for (method, name) in TEXTURE_KERNELS {
+        let s = timing.run(|backend| {
+            backend.run(TextureLookups {
                 texture: &texture,
                 inputs: &tex_inputs,
                 lookups: passes * VALUES,
                 lod: method,
-            })?);
-            Ok(start.elapsed().as_secs_f64())
-        };
-        for &backend in &backends {
-            tex_sample(backend)?; // warm-up
-        }
-        for _ in 0..samples {
-            for &backend in &backends {
-                let s = tex_sample(backend)?;
-                tex_seconds.entry((method, backend)).or_default().push(s);
-            }
-        }
+            })
+        })?;
+        timed.push((name.to_owned(), s, scale));
     }
     texture_lod(ctx, &texture, &tex_inputs)?;
-
     // The tabulated anisotropic BDF (section 4.2, Table 1's workload): calls from a brushed
     // sphere, here so that the portability table has every kernel in one run.
     let bdf = tabulate_anisotropic(
@@ -140,48 +111,100 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     )?;
     let bdf_inputs = BdfInputs::sphere(ctx.pick(256, 512));
     let bdf_calls = passes * VALUES / 4;
-    let mut bdf_seconds: BTreeMap<Backend, Vec<f64>> = BTreeMap::new();
-    let bdf_sample = |backend: Backend| -> anyhow::Result<f64> {
-        let start = std::time::Instant::now();
-        std::hint::black_box(backend.run(BdfCalls {
+    let s = timing.run(|backend| {
+        backend.run(BdfCalls {
             bdf: &bdf,
             inputs: &bdf_inputs,
             calls: bdf_calls,
-        })?);
-        Ok(start.elapsed().as_secs_f64())
-    };
-    for &backend in &backends {
-        bdf_sample(backend)?; // warm-up
+        })
+    })?;
+    timed.push((BDF_KERNEL.to_owned(), s, PER / bdf_calls as f64));
+    // Tone mapping (section 6.1).
+    let tone = ToneWorkload::new();
+    for t in &tone.maps {
+        let s = timing.tone_map(&tone, t, passes)?;
+        timed.push((format!("tonemap_{}", t.operator().name()), s, scale));
     }
-    for _ in 0..samples {
+    bar.finish_and_clear();
+
+    let mut csv = ctx.csv("kernels.csv", HEADER)?;
+    for (name, seconds, scale) in &timed {
+        let scalar = median(&seconds[&Backend::Scalar]) * scale;
         for &backend in &backends {
-            let s = bdf_sample(backend)?;
-            bdf_seconds.entry(backend).or_default().push(s);
+            let s = median(&seconds[&backend]) * scale;
+            csv.row(&[
+                name,
+                &backend.name(),
+                &backend.lanes(),
+                &format!("{s:.6e}"),
+                &format!("{:.3}", speedup(scalar, s)),
+            ])?;
         }
     }
+    csv.finish()?;
+    accuracy(ctx, &backends, &tone)
+}
 
-    // Tone mapping (section 6.1): each operator over a 16,384-pixel HDR image, with its
-    // adaptation from a 1-in-16 subsample (the pre-render).
-    let image = tonemap::workload_image(VALUES);
-    let adaptation = Adaptation::from_luminances(
-        image
-            .iter()
-            .step_by(16)
-            .map(|c| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]),
-    );
-    let maps: Vec<ToneMap> = Operator::ALL
-        .iter()
-        .map(|&op| ToneMap::new(op, adaptation, Display::default()))
-        .collect();
-    // Planar channels, as a packet renderer holds radiance.
-    let planes: [Vec<f32>; 3] = [0, 1, 2].map(|c| image.iter().map(|p| p[c]).collect());
-    let mut out_planes: [Vec<f32>; 3] = [0, 1, 2].map(|_| vec![0.0f32; VALUES]);
-    let mut tm_seconds: BTreeMap<(Operator, Backend), Vec<f64>> = BTreeMap::new();
-    for t in &maps {
-        let mut tm_sample = |backend: Backend| -> anyhow::Result<f64> {
+/// One kernel's timed samples (seconds each) per backend.
+type Samples = BTreeMap<Backend, Vec<f64>>;
+
+/// How the kernels are timed: samples interleaved round-robin over the backends, after one
+/// warm-up sample each.
+struct Timing<'a> {
+    backends: &'a [Backend],
+    samples: usize,
+    bar: &'a indicatif::ProgressBar,
+}
+
+impl Timing<'_> {
+    /// The samples of `f`, one sample a call, its result kept from the optimiser.
+    fn run<T>(
+        &self,
+        mut f: impl FnMut(Backend) -> Result<T, coherent::simd::BackendError>,
+    ) -> anyhow::Result<Samples> {
+        let mut sample = |backend: Backend| -> anyhow::Result<f64> {
             let start = std::time::Instant::now();
+            std::hint::black_box(f(backend)?);
+            Ok(start.elapsed().as_secs_f64())
+        };
+        for &backend in self.backends {
+            sample(backend)?; // warm-up
+        }
+        let mut out = Samples::new();
+        for _ in 0..self.samples {
+            for &backend in self.backends {
+                let s = sample(backend)?;
+                out.entry(backend).or_default().push(s);
+            }
+        }
+        Ok(out)
+    }
+
+    /// An approximation over the coherent inputs, `passes` maps a sample.
+    fn approximation(&self, f: Approx, passes: usize) -> anyhow::Result<Samples> {
+        let (a, b) = approx_inputs(f, VALUES);
+        let mut out = vec![0.0f32; a.len()];
+        let s = self.run(|backend| {
             for _ in 0..passes {
-                let [r, g, b] = std::hint::black_box(&planes);
+                backend.run(ApproxKernel {
+                    f,
+                    a: &a,
+                    b: &b,
+                    out: &mut out,
+                })?;
+            }
+            Ok(())
+        })?;
+        self.bar.inc(self.samples as u64);
+        Ok(s)
+    }
+
+    /// A tone-mapping operator over the workload's planes, `passes` times a sample.
+    fn tone_map(&self, w: &ToneWorkload, t: &ToneMap, passes: usize) -> anyhow::Result<Samples> {
+        let mut out_planes: [Vec<f32>; 3] = [0, 1, 2].map(|_| vec![0.0f32; VALUES]);
+        self.run(|backend| {
+            for _ in 0..passes {
+                let [r, g, b] = std::hint::black_box(&w.planes);
                 let [or, og, ob] = &mut out_planes;
                 tonemap::apply_planar(
                     backend,
@@ -195,86 +218,51 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
                 )?;
             }
             std::hint::black_box(&out_planes);
-            Ok(start.elapsed().as_secs_f64())
-        };
-        for &backend in &backends {
-            tm_sample(backend)?; // warm-up
-        }
-        for _ in 0..samples {
-            for &backend in &backends {
-                let s = tm_sample(backend)?;
-                tm_seconds
-                    .entry((t.operator(), backend))
-                    .or_default()
-                    .push(s);
-            }
-        }
+            Ok(())
+        })
     }
-    bar.finish_and_clear();
+}
 
-    let scale = PER / (passes * VALUES) as f64;
-    let mut csv = ctx.csv("kernels.csv", HEADER)?;
-    for f in kernels {
-        let scalar = median(&seconds[&(f, Backend::Scalar)]) * scale;
-        for &backend in &backends {
-            let s = median(&seconds[&(f, backend)]) * scale;
-            csv.row(&[
-                &f.name(),
-                &backend.name(),
-                &backend.lanes(),
-                &format!("{s:.6e}"),
-                &format!("{:.3}", speedup(scalar, s)),
-            ])?;
-        }
-    }
-    for (method, name) in TEXTURE_KERNELS {
-        let scalar = median(&tex_seconds[&(method, Backend::Scalar)]) * scale;
-        for &backend in &backends {
-            let s = median(&tex_seconds[&(method, backend)]) * scale;
-            csv.row(&[
-                &name,
-                &backend.name(),
-                &backend.lanes(),
-                &format!("{s:.6e}"),
-                &format!("{:.3}", speedup(scalar, s)),
-            ])?;
-        }
-    }
-    {
-        let bdf_scale = PER / bdf_calls as f64;
-        let scalar = median(&bdf_seconds[&Backend::Scalar]) * bdf_scale;
-        for &backend in &backends {
-            let s = median(&bdf_seconds[&backend]) * bdf_scale;
-            csv.row(&[
-                &BDF_KERNEL,
-                &backend.name(),
-                &backend.lanes(),
-                &format!("{s:.6e}"),
-                &format!("{:.3}", speedup(scalar, s)),
-            ])?;
-        }
-    }
-    for op in Operator::ALL {
-        let scalar = median(&tm_seconds[&(op, Backend::Scalar)]) * scale;
-        for &backend in &backends {
-            let s = median(&tm_seconds[&(op, backend)]) * scale;
-            csv.row(&[
-                &format!("tonemap_{}", op.name()),
-                &backend.name(),
-                &backend.lanes(),
-                &format!("{s:.6e}"),
-                &format!("{:.3}", speedup(scalar, s)),
-            ])?;
-        }
-    }
-    csv.finish()?;
+/// Tone mapping's workload: each operator over a 16,384-pixel HDR image, with its adaptation
+/// from a 1-in-16 subsample (the pre-render).
+struct ToneWorkload {
+    image: Vec<[f32; 3]>,
+    /// The image in planar channels, as a packet renderer holds radiance.
+    planes: [Vec<f32>; 3],
+    maps: Vec<ToneMap>,
+}
 
-    // Accuracy: the largest error over a dense sweep of each domain, per backend.
+impl ToneWorkload {
+    fn new() -> Self {
+        let image = tonemap::workload_image(VALUES);
+        let adaptation = Adaptation::from_luminances(
+            image
+                .iter()
+                .step_by(16)
+                .map(|c| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]),
+        );
+        let maps = Operator::ALL
+            .iter()
+            .map(|&op| ToneMap::new(op, adaptation, Display::default()))
+            .collect();
+        let planes = [0, 1, 2].map(|c| image.iter().map(|p| p[c]).collect());
+        Self {
+            image,
+            planes,
+            maps,
+        }
+    }
+}
+
+/// `kernels_accuracy.csv`: the largest error over a dense sweep of each approximation's
+/// domain, per backend; and each tone map's display values against the same operator with
+/// `std` maths, over the timed image, as an absolute error in [0, 1] display units.
+fn accuracy(ctx: &mut Ctx, backends: &[Backend], tone: &ToneWorkload) -> anyhow::Result<()> {
     let mut acc = ctx.csv("kernels_accuracy.csv", ACCURACY_HEADER)?;
     let n = ctx.pick(100_000, 1_000_000);
     for f in Approx::ALL {
         let (a, b) = sweep(f, n);
-        for &backend in &backends {
+        for &backend in backends {
             let got = backend.run(EvalSlices { f, a: &a, b: &b })?;
             let (err, bound, kind) = max_error(f, &a, &b, &got);
             acc.row(&[
@@ -286,12 +274,10 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
             ])?;
         }
     }
-    // Tone mapping: the display values against the same operator with `std` maths, over
-    // the timed image, as an absolute error in [0, 1] display units.
-    for t in &maps {
-        let exact: Vec<[f32; 3]> = image.iter().map(|c| t.apply_exact(*c)).collect();
-        for &backend in &backends {
-            let got = tonemap::apply_image(backend, t, &image)?;
+    for t in &tone.maps {
+        let exact: Vec<[f32; 3]> = tone.image.iter().map(|c| t.apply_exact(*c)).collect();
+        for &backend in backends {
+            let got = tonemap::apply_image(backend, t, &tone.image)?;
             let err = got
                 .iter()
                 .zip(&exact)
@@ -310,7 +296,6 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
         }
     }
     acc.finish()?;
-
     Ok(())
 }
 
@@ -440,7 +425,7 @@ fn portability_report(ctx: &Ctx, t: &crate::Table) -> anyhow::Result<String> {
     if manycore.is_some() {
         md.push_str(&format!(
             "Rows \"default, other CPU\" are `{MANYCORE_FILE}`: the code of that run's revision, on {}.\n\n",
-            crate::table5::manycore_machine(ctx, "kernels")
+            crate::manycore::manycore_machine(ctx, "kernels")
         ));
     }
     let builds: Vec<(&str, &crate::Table)> = std::iter::once(("default", t))
@@ -717,7 +702,7 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
         md.push_str(&format!(
             "\nThe same run (default build) on {}, lent for a session (`manycore/`, with its own \
              `machine.json`); speedup over scalar there:\n\n",
-            crate::table5::manycore_machine(ctx, "kernels")
+            crate::manycore::manycore_machine(ctx, "kernels")
         ));
         md.push_str(&m.pivot("kernel", "backend", "speedup")?);
     }

@@ -12,6 +12,7 @@ pub mod experiment;
 pub mod frames;
 pub mod headline;
 pub mod machine_keys;
+mod manycore;
 pub mod plot;
 pub mod readme;
 pub mod table;

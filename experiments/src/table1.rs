@@ -391,7 +391,7 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
         md.push_str(&format!(
             "\nThe same run on {}, lent for a session (`manycore/`, with its own \
              `machine.json`); speedup over scalar there:\n\n",
-            crate::table5::manycore_machine(ctx, "table1")
+            crate::manycore::manycore_machine(ctx, "table1")
         ));
         md.push_str(&m.pivot("calls", "backend", "speedup")?);
     }

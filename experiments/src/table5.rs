@@ -18,6 +18,7 @@ use coherent::simd::Backend;
 use crate::ctx::Ctx;
 use crate::experiment::{Experiment, Status};
 use crate::frames::{self, Plan};
+use crate::manycore::{MANYCORE, manycore_machine};
 use crate::plot::{LineChart, Series};
 use crate::table::{PaperTable, fmt_num, markdown_table};
 use crate::timing::{median, speedup};
@@ -48,9 +49,6 @@ fn rounds_for(seconds: f64) -> usize {
     let n = (TIMED_SECONDS / seconds.max(1e-6)).ceil();
     (n.min(MAX_ROUNDS as f64) as usize).max(MIN_ROUNDS)
 }
-/// The folder, beside these results, of a run on a machine with more cores (its own
-/// `machine.json`, README, CSV files and plots); the `accel` report reads its run there too.
-pub(crate) const MANYCORE: &str = "manycore";
 /// The contract's columns, then the lanes of the backend.
 pub(crate) const HEADER: &[&str] = &["scene", "backend", "threads", "seconds", "speedup", "lanes"];
 
@@ -291,29 +289,6 @@ fn every_row(t: &crate::Table) -> anyhow::Result<String> {
     }
     let h: Vec<&str> = header.iter().map(String::as_str).collect();
     Ok(markdown_table(&h, &rows))
-}
-
-/// The machine of the run in `manycore/` (its `machine.json`), in words, with the git revision
-/// and date of the run that wrote `experiment`'s results there (its entry under `runs`; the
-/// file's own, written by the last run, for results older than that record).
-pub fn manycore_machine(ctx: &Ctx, experiment: &str) -> String {
-    let machine = std::fs::read_to_string(ctx.path(&format!("{MANYCORE}/machine.json")))
-        .ok()
-        .and_then(|text| serde_json::from_str::<serde_json::Value>(&text).ok());
-    match &machine {
-        Some(m) => {
-            let run = m["runs"].get(experiment).unwrap_or(m);
-            format!(
-                "{} with {} cores ({} hardware threads), git revision `{}`, {}",
-                m["cpu"].as_str().unwrap_or("?"),
-                m["cores"],
-                m["threads"],
-                run["git_rev"].as_str().unwrap_or("?"),
-                run["date"].as_str().unwrap_or("?"),
-            )
-        }
-        None => "a machine whose `machine.json` is missing".to_owned(),
-    }
 }
 
 /// The same experiment run on a machine with more cores, into `manycore/` beside these

@@ -14,7 +14,8 @@ use coherent::film::{
     FilmOptions, Method, PassReport, scale_top, write_heatmap_png, write_map_exr,
 };
 use coherent::median::median;
-use coherent::render::{AovBuffer, AovKind, Packets, RayKind, Renderer, render_frame};
+use coherent::render::{AovBuffer, AovKind, Packets, RayKind, RenderStats, Renderer, render_frame};
+use coherent::scene::RenderScene;
 use coherent::simd::Backend;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -24,9 +25,9 @@ use crate::RenderArgs;
 /// (rayon's pool with thousands of threads took minutes to start and stop for a 0.01 s frame).
 const MAX_THREADS: usize = 1024;
 
-/// Runs `coherent render`.
-pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
-    // Check the cheap things before loading anything.
+/// Checks the cheap things before loading anything: the backend, the accelerator's name, the
+/// output's type and folder, the thread count.
+fn check_args(args: &RenderArgs) -> anyhow::Result<(Backend, AccelKind)> {
     let backend = match &args.backend {
         Some(b) => {
             let b: Backend = b.parse()?;
@@ -64,8 +65,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             dir.display()
         );
     }
+    Ok((backend, kind))
+}
 
-    let t_load = Instant::now();
+/// Loads the scene with the command line's overrides, validated, and merges its static
+/// instances unless told not to: the scene, its objects before merging and those merged.
+fn load_scene(args: &RenderArgs) -> anyhow::Result<(RenderScene, usize, usize)> {
     let mut scene = coherent::scene::load(&args.scene)?;
     if let Some((w, h)) = args.resolution {
         scene.width = w;
@@ -85,8 +90,13 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         scene = s;
         report.merged
     };
-    let (w, h) = (scene.width, scene.height);
-    let method = match (args.spp, args.accuracy, scene.spp, scene.accuracy) {
+    Ok((scene, objects, merged))
+}
+
+/// The film's sampling: `--spp`, else `--accuracy`, else the scene's own, else adaptive at
+/// 5%.
+fn film_method(args: &RenderArgs, scene: &RenderScene) -> Method {
+    match (args.spp, args.accuracy, scene.spp, scene.accuracy) {
         (Some(spp), _, _, _) => Method::Uniform { spp },
         (None, Some(accuracy), _, _) | (None, None, _, Some(accuracy)) => Method::Adaptive {
             accuracy,
@@ -99,7 +109,16 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             max_samples_per_pixel: args.max_spp,
             time_budget: None,
         },
-    };
+    }
+}
+
+/// Runs `coherent render`.
+pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
+    let (backend, kind) = check_args(args)?;
+    let t_load = Instant::now();
+    let (scene, objects, merged) = load_scene(args)?;
+    let (w, h) = (scene.width, scene.height);
+    let method = film_method(args, &scene);
     let mut opts = FilmOptions::new(w, h, method);
     if let Some(op) = &args.tonemap {
         opts.tonemap = op.parse().map_err(|e| anyhow::anyhow!("--tonemap: {e}"))?;
@@ -143,15 +162,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .build()
         .context("starting the worker threads")?;
 
-    let bar = if args.quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(1000)
-    };
-    bar.set_style(
-        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {percent:>3}% {msg}")
-            .expect("a valid template"),
-    );
+    let bar = progress_bar(args.quiet);
     let spp = match method {
         Method::Uniform { spp } => Some(spp),
         Method::Adaptive { .. } => None,
@@ -189,15 +200,6 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
 
     let st = &rendered.stats;
     let rays = st.total_rays();
-    let mut kinds = Vec::new();
-    for k in RayKind::ALL {
-        kinds.push(format!("{} {}", k.name(), st.rays(k)));
-    }
-    let lanes: Vec<String> = RayKind::ALL
-        .iter()
-        .filter(|k| st.kinds[**k as usize].packets > 0)
-        .map(|k| format!("{} {:.2}", k.name(), st.kinds[*k as usize].average()))
-        .collect();
     println!(
         "{}: {}x{} {} ({} triangles, {}), {} + {}{}, {} thread(s), {}: {:.3} s ({:.1} Mrays/s); rays: {}; \
          active lanes per packet (of {}): {}; by depth: {}; material passes per packet {:.2}; \
@@ -207,29 +209,17 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         h,
         method.name(),
         scene.triangles(),
-        if merged > 0 {
-            format!(
-                "{objects} objects, {merged} static ones merged: {} left",
-                scene.instances.len()
-            )
-        } else {
-            format!("{objects} objects")
-        },
+        objects_text(objects, merged, scene.instances.len()),
         backend.name(),
         kind,
-        match (args.regroup, args.packets) {
-            (false, Packets::Lanes) => "",
-            (true, Packets::Lanes) => ", regrouped",
-            (false, Packets::Beam) => ", camera beams",
-            (true, Packets::Beam) => ", camera beams, regrouped",
-        },
+        packets_text(args),
         threads,
         stop_text(&rendered),
         seconds.as_secs_f64(),
         rays as f64 / seconds.as_secs_f64().max(1e-9) * 1e-6,
-        kinds.join(", "),
+        rays_text(st),
         backend.lanes(),
-        lanes.join(", "),
+        lanes_text(st),
         st.depth_summary(),
         st.materials.passes_per_packet(),
         build.as_secs_f64(),
@@ -252,6 +242,65 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             st.stage_summary()
         );
     }
+    warn_bad_samples(&rendered);
+    Ok(())
+}
+
+/// The scene's objects for the summary line: before merging, merged and left.
+fn objects_text(objects: usize, merged: usize, left: usize) -> String {
+    if merged > 0 {
+        format!("{objects} objects, {merged} static ones merged: {left} left")
+    } else {
+        format!("{objects} objects")
+    }
+}
+
+/// How the packets travelled, for the summary line.
+fn packets_text(args: &RenderArgs) -> &'static str {
+    match (args.regroup, args.packets) {
+        (false, Packets::Lanes) => "",
+        (true, Packets::Lanes) => ", regrouped",
+        (false, Packets::Beam) => ", camera beams",
+        (true, Packets::Beam) => ", camera beams, regrouped",
+    }
+}
+
+/// Rays traced per kind.
+fn rays_text(st: &RenderStats) -> String {
+    let kinds: Vec<String> = RayKind::ALL
+        .iter()
+        .map(|&k| format!("{} {}", k.name(), st.rays(k)))
+        .collect();
+    kinds.join(", ")
+}
+
+/// Active lanes per packet per kind of rays traced in packets.
+fn lanes_text(st: &RenderStats) -> String {
+    let lanes: Vec<String> = RayKind::ALL
+        .iter()
+        .filter(|k| st.kinds[**k as usize].packets > 0)
+        .map(|k| format!("{} {:.2}", k.name(), st.kinds[*k as usize].average()))
+        .collect();
+    lanes.join(", ")
+}
+
+/// The render's progress bar (hidden with `--quiet`).
+fn progress_bar(quiet: bool) -> ProgressBar {
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(1000)
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {percent:>3}% {msg}")
+            .expect("a valid template"),
+    );
+    bar
+}
+
+/// Warns about samples that were set to 0: infinite or NaN image samples, NaN radiance.
+fn warn_bad_samples(rendered: &coherent::film::Rendered<RenderStats>) {
+    let st = &rendered.stats;
     let fixed = rendered.fixups;
     if fixed.non_finite > 0 {
         eprintln!(
@@ -268,7 +317,6 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             st.nan
         );
     }
-    Ok(())
 }
 
 fn stop_text<S>(r: &coherent::film::Rendered<S>) -> String {

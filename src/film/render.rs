@@ -44,19 +44,7 @@ pub fn render<T: SampleTracer>(
     progress: &(dyn Fn(&PassReport) + Sync),
 ) -> Result<Rendered<T::Stats>, FilmError> {
     opts.validate()?;
-    if let Some(reason) = backend.unavailable_reason() {
-        return Err(FilmError::Backend(
-            coherent_simd::BackendError::Unavailable {
-                backend,
-                reason,
-                available: Backend::available()
-                    .iter()
-                    .map(|b| b.name())
-                    .collect::<Vec<_>>()
-                    .join(", "),
-            },
-        ));
-    }
+    check_backend(backend)?;
     let start = Instant::now();
     let (w, h) = (opts.width, opts.height);
     let lanes = backend.lanes();
@@ -149,60 +137,26 @@ pub fn render<T: SampleTracer>(
         // per tile (the digit loops took 8 ms of a 1024 x 768 frame at 16 lanes, one core).
         let places: Vec<Place> = (begin..end).map(|i| Place::new(tile, i)).collect();
 
-        // Each tile files its samples into the film as soon as they are traced, into the
-        // band of its row of tiles, locked while one tile files (144 samples at 1 spp). Tiles
-        // do not share pixels and a tile files its samples in trace order, so each pixel's
-        // sums do not depend on the threads.
-        let lines = film.lines();
-        let bands: Vec<Mutex<FilmBand<'_>>> = film
-            .bands(tile.height())
-            .into_iter()
-            .map(Mutex::new)
-            .collect();
-        let outs = tiles
-            .par_iter()
-            .with_max_len(TILES_PER_JOB)
-            .map(|&(tx, ty)| {
-                let job = PassJob {
-                    origin: (tx * tile.width(), ty * tile.height()),
-                    width: w,
-                    height: h,
-                    begin,
-                    end,
-                    span,
-                    need: need.as_deref(),
-                    places: &places,
-                    id_base,
-                    tile: (tile.width(), tile.height()),
-                    lines,
-                };
-                pass_tile(backend, tracer, &job, &bands[ty as usize])
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        drop(bands);
-        let mut traced = 0;
-        let mut skipped = 0;
-        let mut this_pass = 0;
-        let mut coh = Coherence::default();
-        let mut coh_sum = 0.0;
-        let mut coh_n = 0u64;
-        for o in outs {
-            fixups.non_finite += o.fixups.non_finite;
-            fixups.negative += o.fixups.negative;
-            this_pass += o.rays;
-            traced += o.traced;
-            skipped += o.skipped;
-            coh_sum += o.dist_sum;
-            coh_n += o.dist_n;
-            coh.max_distance = coh.max_distance.max(o.dist_max);
-            coh.groups += o.multi_groups;
-            T::merge_stats(&mut stats, o.stats);
-        }
-        coh.mean_distance = if coh_n > 0 {
-            coh_sum / coh_n as f64
-        } else {
-            0.0
+        let job = PassJob {
+            origin: (0, 0),
+            width: w,
+            height: h,
+            begin,
+            end,
+            span,
+            need: need.as_deref(),
+            places: &places,
+            id_base,
+            tile: (tile.width(), tile.height()),
+            lines: film.lines(),
         };
+        let outs = trace_tiles(backend, tracer, &mut film, &tiles, &job)?;
+        let PassSums {
+            rays: this_pass,
+            traced,
+            skipped,
+            coherence: coh,
+        } = PassSums::of(outs, &mut fixups, &mut stats, T::merge_stats);
         rays += this_pass;
         let done = match opts.method {
             Method::Adaptive {
@@ -247,6 +201,99 @@ pub fn render<T: SampleTracer>(
         fixups,
         stop,
     })
+}
+
+/// Traces one pass over `tiles`, each tile a copy of `job` at its own origin. Each tile files
+/// its samples into the film as soon as they are traced, into the band of its row of tiles,
+/// locked while one tile files (144 samples at 1 spp). Tiles do not share pixels and a tile
+/// files its samples in trace order, so each pixel's sums do not depend on the threads.
+fn trace_tiles<T: SampleTracer>(
+    backend: Backend,
+    tracer: &T,
+    film: &mut Film,
+    tiles: &[(u32, u32)],
+    job: &PassJob<'_>,
+) -> Result<Vec<TileOut<T::Stats>>, FilmError> {
+    let (tw, th) = job.tile;
+    let bands: Vec<Mutex<FilmBand<'_>>> = film.bands(th).into_iter().map(Mutex::new).collect();
+    let outs = tiles
+        .par_iter()
+        .with_max_len(TILES_PER_JOB)
+        .map(|&(tx, ty)| {
+            let job = PassJob {
+                origin: (tx * tw, ty * th),
+                ..*job
+            };
+            pass_tile(backend, tracer, &job, &bands[ty as usize])
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(outs)
+}
+
+/// A backend this CPU cannot run, as the film's error.
+fn check_backend(backend: Backend) -> Result<(), FilmError> {
+    match backend.unavailable_reason() {
+        None => Ok(()),
+        Some(reason) => Err(FilmError::Backend(
+            coherent_simd::BackendError::Unavailable {
+                backend,
+                reason,
+                available: Backend::available()
+                    .iter()
+                    .map(|b| b.name())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            },
+        )),
+    }
+}
+
+/// A pass's tiles summed: rays traced, groups traced and skipped, coherence.
+struct PassSums {
+    rays: u64,
+    traced: u64,
+    skipped: u64,
+    coherence: Coherence,
+}
+
+impl PassSums {
+    /// Sums the tiles' outputs, adding their fix-ups and statistics to the frame's.
+    fn of<S>(
+        outs: Vec<TileOut<S>>,
+        fixups: &mut Fixups,
+        stats: &mut S,
+        merge: fn(&mut S, S),
+    ) -> Self {
+        let mut traced = 0;
+        let mut skipped = 0;
+        let mut this_pass = 0;
+        let mut coh = Coherence::default();
+        let mut coh_sum = 0.0;
+        let mut coh_n = 0u64;
+        for o in outs {
+            fixups.non_finite += o.fixups.non_finite;
+            fixups.negative += o.fixups.negative;
+            this_pass += o.rays;
+            traced += o.traced;
+            skipped += o.skipped;
+            coh_sum += o.dist_sum;
+            coh_n += o.dist_n;
+            coh.max_distance = coh.max_distance.max(o.dist_max);
+            coh.groups += o.multi_groups;
+            merge(stats, o.stats);
+        }
+        coh.mean_distance = if coh_n > 0 {
+            coh_sum / coh_n as f64
+        } else {
+            0.0
+        };
+        Self {
+            rays: this_pass,
+            traced,
+            skipped,
+            coherence: coh,
+        }
+    }
 }
 
 #[inline]
@@ -410,6 +457,7 @@ struct TileOut<S> {
 }
 
 /// One tile's share of a pass: which samples of the tile's Halton sequence it traces.
+#[derive(Clone, Copy)]
 struct PassJob<'a> {
     origin: (u32, u32),
     width: u32,

@@ -56,6 +56,50 @@ impl<'a> Tokens<'a> {
         }
     }
 
+    /// A number that must not be negative.
+    fn non_negative(&mut self, field: &str) -> Result<f64, LightError> {
+        let (line, v) = self.number(field)?;
+        if v < 0.0 {
+            return Err(self.err(line, field, format!("{v} is negative")));
+        }
+        Ok(v)
+    }
+
+    /// `n` increasing angles in -360..360 degrees.
+    fn angles(&mut self, n: usize, field: &str) -> Result<Vec<f32>, LightError> {
+        let path = self.path;
+        super::photometry::read_angles(path, n, field, |f| self.number(f))
+    }
+
+    /// Reads past `TILT=INCLUDE`'s tilt data (checked, not used: the lamp is not tilted).
+    fn tilt_data(&mut self) -> Result<(), LightError> {
+        let (line, geometry) = self.number("TILT lamp-to-luminaire geometry")?;
+        if ![1.0, 2.0, 3.0].contains(&geometry) {
+            return Err(self.err(
+                line,
+                "TILT lamp-to-luminaire geometry",
+                format!("{geometry}: expected 1, 2 or 3"),
+            ));
+        }
+        let n = self.count("TILT number of angles", 1 << 16)?;
+        let mut prev = f64::NEG_INFINITY;
+        for k in 0..n {
+            let (line, a) = self.number("TILT angle")?;
+            if a <= prev {
+                return Err(self.err(
+                    line,
+                    "TILT angle",
+                    format!("angle {} ({a}) does not increase", k + 1),
+                ));
+            }
+            prev = a;
+        }
+        for _ in 0..n {
+            self.non_negative("TILT multiplying factor")?;
+        }
+        Ok(())
+    }
+
     fn count(&mut self, field: &str, max: usize) -> Result<usize, LightError> {
         let (line, v) = self.number(field)?;
         if v.fract() != 0.0 || v < 1.0 || v > max as f64 {
@@ -112,39 +156,7 @@ pub fn parse(text: &str, path: &Path) -> Result<PhotometricTable, LightError> {
     };
     match tilt.to_ascii_uppercase().as_str() {
         "NONE" => {}
-        "INCLUDE" => {
-            let (line, geometry) = t.number("TILT lamp-to-luminaire geometry")?;
-            if ![1.0, 2.0, 3.0].contains(&geometry) {
-                return Err(err(
-                    line,
-                    "TILT lamp-to-luminaire geometry",
-                    format!("{geometry}: expected 1, 2 or 3"),
-                ));
-            }
-            let n = t.count("TILT number of angles", 1 << 16)?;
-            let mut prev = f64::NEG_INFINITY;
-            for k in 0..n {
-                let (line, a) = t.number("TILT angle")?;
-                if a <= prev {
-                    return Err(err(
-                        line,
-                        "TILT angle",
-                        format!("angle {} ({a}) does not increase", k + 1),
-                    ));
-                }
-                prev = a;
-            }
-            for _ in 0..n {
-                let (line, f) = t.number("TILT multiplying factor")?;
-                if f < 0.0 {
-                    return Err(err(
-                        line,
-                        "TILT multiplying factor",
-                        format!("{f} is negative"),
-                    ));
-                }
-            }
-        }
+        "INCLUDE" => t.tilt_data()?,
         _ => {
             return Err(err(
                 tilt_at + 1,
@@ -157,14 +169,7 @@ pub fn parse(text: &str, path: &Path) -> Result<PhotometricTable, LightError> {
     }
     let _lamps = t.number("number of lamps")?;
     let _lumens = t.number("lumens per lamp")?;
-    let (line, multiplier) = t.number("candela multiplier")?;
-    if multiplier < 0.0 {
-        return Err(err(
-            line,
-            "candela multiplier",
-            format!("{multiplier} is negative"),
-        ));
-    }
+    let multiplier = t.non_negative("candela multiplier")?;
     let n_vertical = t.count("number of vertical angles", 1 << 14)?;
     let n_horizontal = t.count("number of horizontal angles", 1 << 14)?;
     let (line, kind) = t.number("photometric type")?;
@@ -184,45 +189,11 @@ pub fn parse(text: &str, path: &Path) -> Result<PhotometricTable, LightError> {
     let _width = t.number("luminous width")?;
     let _length = t.number("luminous length")?;
     let _height = t.number("luminous height")?;
-    let (line, ballast) = t.number("ballast factor")?;
-    if ballast < 0.0 {
-        return Err(err(
-            line,
-            "ballast factor",
-            format!("{ballast} is negative"),
-        ));
-    }
+    let ballast = t.non_negative("ballast factor")?;
     let _future = t.number("ballast-lamp factor / file generation type")?;
     let _watts = t.number("input watts")?;
-    let read_angles = |t: &mut Tokens, n: usize, field: &str| -> Result<Vec<f32>, LightError> {
-        let mut v: Vec<f32> = Vec::with_capacity(n);
-        for k in 0..n {
-            let (line, a) = t.number(field)?;
-            if !(-360.0..=360.0).contains(&a) {
-                return Err(err(
-                    line,
-                    field,
-                    format!("angle {} is {a}, outside -360..360 degrees", k + 1),
-                ));
-            }
-            if let Some(&p) = v.last()
-                && a as f32 <= p
-            {
-                return Err(err(
-                    line,
-                    field,
-                    format!(
-                        "angle {} ({a}) is not above the one before ({p}): angles must increase",
-                        k + 1
-                    ),
-                ));
-            }
-            v.push(a as f32);
-        }
-        Ok(v)
-    };
-    let angles = read_angles(&mut t, n_vertical, "vertical angles")?;
-    let planes = read_angles(&mut t, n_horizontal, "horizontal angles")?;
+    let angles = t.angles(n_vertical, "vertical angles")?;
+    let planes = t.angles(n_horizontal, "horizontal angles")?;
     let scale = multiplier * ballast;
     let mut candela = Vec::with_capacity(n_vertical * n_horizontal);
     for h in 0..n_horizontal {

@@ -10,7 +10,7 @@
 use std::path::Path;
 
 use super::LightError;
-use super::photometry::{PhotometricTable, PhotometricType, quote};
+use super::photometry::{PhotometricTable, PhotometricType, quote, read_angles};
 
 /// Reads and parses a EULUMDAT file (any 8-bit encoding: text fields are not used).
 pub fn load(path: &Path) -> Result<PhotometricTable, LightError> {
@@ -28,6 +28,15 @@ struct Lines<'a> {
 }
 
 impl Lines<'_> {
+    /// A number that must not be negative.
+    fn non_negative(&mut self, field: &str) -> Result<f64, LightError> {
+        let (line, v) = self.number(field)?;
+        if v < 0.0 {
+            return Err(self.err(line, field, format!("{v} is negative")));
+        }
+        Ok(v)
+    }
+
     fn err(&self, line: usize, field: &str, problem: String) -> LightError {
         LightError::Parse {
             path: self.path.to_path_buf(),
@@ -110,14 +119,7 @@ pub fn parse(text: &str, path: &Path) -> Result<PhotometricTable, LightError> {
     ] {
         f.number(field)?;
     }
-    let (line, cfli) = f.number("conversion factor for luminous intensities CFLI")?;
-    if cfli < 0.0 {
-        return Err(f.err(
-            line,
-            "conversion factor for luminous intensities CFLI",
-            format!("{cfli} is negative"),
-        ));
-    }
+    let cfli = f.non_negative("conversion factor for luminous intensities CFLI")?;
     // Some writers leave CFLI at 0 meaning "no conversion".
     let cfli = if cfli == 0.0 { 1.0 } else { cfli };
     f.number("tilt of luminaire during measurement")?;
@@ -130,15 +132,7 @@ pub fn parse(text: &str, path: &Path) -> Result<PhotometricTable, LightError> {
     }
     let mut flux = 0.0;
     for _ in 0..sets {
-        let (line, v) = f.number("total luminous flux of lamps")?;
-        if v < 0.0 {
-            return Err(f.err(
-                line,
-                "total luminous flux of lamps",
-                format!("{v} is negative"),
-            ));
-        }
-        flux += v;
+        flux += f.non_negative("total luminous flux of lamps")?;
     }
     for _ in 0..sets {
         f.text("colour temperature")?;
@@ -152,35 +146,8 @@ pub fn parse(text: &str, path: &Path) -> Result<PhotometricTable, LightError> {
     for _ in 0..10 {
         f.number("direct ratios")?;
     }
-    let read_angles = |f: &mut Lines, n: usize, field: &str| -> Result<Vec<f32>, LightError> {
-        let mut v: Vec<f32> = Vec::with_capacity(n);
-        for k in 0..n {
-            let (line, a) = f.number(field)?;
-            if !(-360.0..=360.0).contains(&a) {
-                return Err(f.err(
-                    line,
-                    field,
-                    format!("angle {} is {a}, outside -360..360 degrees", k + 1),
-                ));
-            }
-            if let Some(&p) = v.last()
-                && a as f32 <= p
-            {
-                return Err(f.err(
-                    line,
-                    field,
-                    format!(
-                        "angle {} ({a}) is not above the one before ({p}): angles must increase",
-                        k + 1
-                    ),
-                ));
-            }
-            v.push(a as f32);
-        }
-        Ok(v)
-    };
-    let c_angles = read_angles(&mut f, mc, "C-plane angles")?;
-    let gammas = read_angles(&mut f, ng, "gamma angles")?;
+    let c_angles = read_angles(path, mc, "C-plane angles", |field| f.number(field))?;
+    let gammas = read_angles(path, ng, "gamma angles", |field| f.number(field))?;
     // The planes stored for each symmetry.
     let (first, count) = match isym {
         0 => (0, mc),

@@ -255,6 +255,45 @@ fn unfold(planes: &[f32], maps: &[fn(f32) -> f32], (lo, hi): (f32, f32)) -> Vec<
     all
 }
 
+/// `n` increasing angles in -360..360 degrees for a photometric file's `field`, each read by
+/// `number` with its line; an error names `path`, the line and the field.
+pub(crate) fn read_angles(
+    path: &std::path::Path,
+    n: usize,
+    field: &str,
+    mut number: impl FnMut(&str) -> Result<(usize, f64), super::LightError>,
+) -> Result<Vec<f32>, super::LightError> {
+    let err = |line: usize, problem: String| super::LightError::Parse {
+        path: path.to_path_buf(),
+        line,
+        field: field.to_owned(),
+        problem,
+    };
+    let mut v: Vec<f32> = Vec::with_capacity(n);
+    for k in 0..n {
+        let (line, a) = number(field)?;
+        if !(-360.0..=360.0).contains(&a) {
+            return Err(err(
+                line,
+                format!("angle {} is {a}, outside -360..360 degrees", k + 1),
+            ));
+        }
+        if let Some(&p) = v.last()
+            && a as f32 <= p
+        {
+            return Err(err(
+                line,
+                format!(
+                    "angle {} ({a}) is not above the one before ({p}): angles must increase",
+                    k + 1
+                ),
+            ));
+        }
+        v.push(a as f32);
+    }
+    Ok(v)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -14,9 +14,7 @@ pub use ply::read_ply;
 
 use std::path::{Path, PathBuf};
 
-use coherent_accel::scenes::{BuiltinScene, View};
-use coherent_accel::{Mesh, Scene};
-use glam::Vec3;
+use coherent_accel::Mesh;
 
 use crate::material::Material;
 use crate::scene::ShadedMesh;
@@ -120,26 +118,6 @@ impl RealMesh {
         let mut mesh = load(&path)?;
         mesh.name = self.name.to_string();
         Ok(mesh)
-    }
-
-    /// The mesh as a scene for the comparisons: placed once, seen from the front-right and
-    /// a little above (+y up) so that it fills most of the view, lit from above the eye.
-    pub fn scene(&self) -> Result<BuiltinScene, MeshFileError> {
-        let mesh = self.load()?;
-        let b = mesh.bounds();
-        let (center, radius) = (b.center(), 0.5 * b.extent().length());
-        let eye = center + Vec3::new(0.35, 0.25, 1.0).normalize() * (2.6 * radius);
-        Ok(BuiltinScene {
-            name: self.name,
-            scene: Scene::single(mesh),
-            view: View {
-                eye,
-                target: center,
-                up: Vec3::Y,
-                fov_y_degrees: 45.0,
-            },
-            light: center + Vec3::new(-0.5, 2.0, 1.5) * radius,
-        })
     }
 
     /// The real mesh called `name`.
@@ -272,31 +250,6 @@ fn number<T: std::str::FromStr>(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn fetched_meshes_load_as_scenes() {
-        for m in REAL_MESHES {
-            match m.scene() {
-                Ok(s) => {
-                    s.scene.validate().unwrap();
-                    assert!(s.scene.meshes[0].indices.len() > 10_000, "{}", m.name);
-                    // The view looks at the mesh: the central primary ray hits its box.
-                    let r = s.view.ray_at(0.5, 0.5, 4.0 / 3.0);
-                    let b = s.scene.meshes[0].bounds();
-                    assert!(
-                        b.clip1(r.origin, r.dir.recip(), 0.0, f32::INFINITY)
-                            .is_some()
-                    );
-                }
-                Err(e @ MeshFileError::NotFetched { .. })
-                    if !crate::require::required("COHERENT_REQUIRE_MESHES") =>
-                {
-                    eprintln!("skipping {}: {e}", m.name)
-                }
-                Err(e) => panic!("{e}"),
-            }
-        }
-    }
 
     #[test]
     fn unfetched_mesh_names_the_fix() {

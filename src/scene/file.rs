@@ -487,7 +487,74 @@ fn build(src: &Source, spec: SceneSpec) -> Result<RenderScene, SceneError> {
             .file_stem()
             .map_or_else(|| "scene".to_string(), |s| s.to_string_lossy().into_owned())
     });
-    let (width, height) = match &spec.resolution {
+    let (width, height) = resolution(src, &spec)?;
+    let camera = camera(src, &spec)?;
+    let tonemap = match &spec.tonemap {
+        None => Operator::default(),
+        Some(t) => t
+            .get_ref()
+            .parse()
+            .map_err(|e| src.at(t.span(), "tonemap", e))?,
+    };
+    // Materials, in name order; mesh files append theirs.
+    let mut objects = Objects::default();
+    for (mname, m) in &spec.materials {
+        let mat = material(src, mname, m)?;
+        mat.validate()
+            .map_err(|e| src.at(m.span(), &format!("materials.{mname}"), e))?;
+        objects
+            .ids
+            .insert(mname.clone(), objects.materials.len() as u32);
+        objects.materials.push(mat);
+    }
+    for (k, o) in spec.objects.iter().enumerate() {
+        objects.place(src, &spec, k, o)?;
+    }
+    if objects.instances.is_empty() {
+        return Err(SceneError::Syntax {
+            path: src.path.to_path_buf(),
+            line: 1,
+            column: 1,
+            problem: "objects: the scene has no object (add an [[objects]] table)".to_string(),
+        });
+    }
+    let lights = lights(src, &spec, objects.gltf_lights)?;
+    let scene = RenderScene {
+        name,
+        meshes: objects.meshes,
+        instances: objects.instances,
+        materials: objects.materials,
+        lights,
+        camera,
+        width,
+        height,
+        depth: spec.depth.unwrap_or(1),
+        spp: spec.spp,
+        accuracy: spec.accuracy,
+        tonemap,
+        background: spec.background,
+        motion: objects.motion,
+    };
+    scene.validate().map_err(|e| match e {
+        // At the key's line when it is a top-level key of the file (`spp = 0`), else naming
+        // the file without a line.
+        SceneError::Invalid { field, problem, .. } => match src.key_line(&field) {
+            Some((line, column)) => SceneError::Syntax {
+                path: src.path.to_path_buf(),
+                line,
+                column,
+                problem: format!("{field}: {problem}"),
+            },
+            None => SceneError::invalid(src.path.display().to_string(), field, problem),
+        },
+        e => e,
+    })?;
+    Ok(scene)
+}
+
+/// The image's size: the file's, checked, or the default.
+fn resolution(src: &Source, spec: &SceneSpec) -> Result<(u32, u32), SceneError> {
+    Ok(match &spec.resolution {
         None => super::DEFAULT_RESOLUTION,
         Some(r) => {
             let [w, h] = *r.get_ref();
@@ -510,7 +577,11 @@ fn build(src: &Source, spec: SceneSpec) -> Result<RenderScene, SceneError> {
             }
             (w, h)
         }
-    };
+    })
+}
+
+/// The camera, checked.
+fn camera(src: &Source, spec: &SceneSpec) -> Result<Camera, SceneError> {
     let c = spec.camera.get_ref();
     let camera = Camera {
         position: Vec3::from(c.position),
@@ -521,58 +592,60 @@ fn build(src: &Source, spec: SceneSpec) -> Result<RenderScene, SceneError> {
     if let Some((field, problem)) = camera.problem() {
         return Err(src.at(spec.camera.span(), &format!("camera.{field}"), problem));
     }
-    let tonemap = match &spec.tonemap {
-        None => Operator::default(),
-        Some(t) => t
-            .get_ref()
-            .parse()
-            .map_err(|e| src.at(t.span(), "tonemap", e))?,
-    };
+    Ok(camera)
+}
 
-    // Materials, in name order; mesh files append theirs.
-    let mut materials = Vec::new();
-    let mut ids = HashMap::new();
-    for (mname, m) in &spec.materials {
-        let mat = material(src, mname, m)?;
-        mat.validate()
-            .map_err(|e| src.at(m.span(), &format!("materials.{mname}"), e))?;
-        ids.insert(mname.clone(), materials.len() as u32);
-        materials.push(mat);
+/// The lights: the glTF files' punctual lights, then the file's.
+fn lights(
+    src: &Source,
+    spec: &SceneSpec,
+    gltf_lights: Vec<Light>,
+) -> Result<Vec<Light>, SceneError> {
+    let mut lights = gltf_lights;
+    for (k, l) in spec.lights.iter().enumerate() {
+        // A setting out of range is the scene file's error, not its file's (even when the
+        // light's file was fetched by the set-up).
+        let light = make_light(src, l.get_ref(), k as u64).map_err(|e| match l.get_ref() {
+            LightSpec::Goniodiagram { file, .. } | LightSpec::Environment { file, .. }
+                if !matches!(e, light::LightError::BadParameter { .. }) =>
+            {
+                src.file_err(l.span(), &format!("lights[{k}].file"), file, e, None)
+            }
+            _ => src.at(l.span(), &format!("lights[{k}]"), e),
+        })?;
+        lights.push(light);
     }
+    Ok(lights)
+}
 
-    // Objects: each mesh (file or shape, with its material) is built once and instanced.
-    let mut meshes: Vec<ShadedMesh> = Vec::new();
-    let mut mesh_ids: HashMap<(String, Option<u32>), usize> = HashMap::new();
-    let mut instances = Vec::new();
-    let mut motion = Vec::new();
-    let mut gltf_lights = Vec::new();
-    for (k, o) in spec.objects.iter().enumerate() {
+/// The scene's objects as they are placed: each mesh (file or shape, with its material)
+/// built once and instanced.
+#[derive(Default)]
+struct Objects {
+    materials: Vec<Material>,
+    /// Material ids by the file's names.
+    ids: HashMap<String, u32>,
+    meshes: Vec<ShadedMesh>,
+    /// Mesh ids by (`mesh:FILE` or `shape:SHAPE`, material).
+    mesh_ids: HashMap<(String, Option<u32>), usize>,
+    instances: Vec<Instance>,
+    motion: Vec<InstanceMotion>,
+    gltf_lights: Vec<Light>,
+}
+
+impl Objects {
+    /// Places `objects[k]`.
+    fn place(
+        &mut self,
+        src: &Source,
+        spec: &SceneSpec,
+        k: usize,
+        o: &Spanned<ObjectSpec>,
+    ) -> Result<(), SceneError> {
         let field = format!("objects[{k}]");
         let span = o.span();
         let o = o.get_ref();
-        let mat = match &o.material {
-            None => None,
-            Some(m) => Some(*ids.get(m.get_ref()).ok_or_else(|| {
-                let known: Vec<_> = spec.materials.keys().map(String::as_str).collect();
-                src.at(
-                    m.span(),
-                    &format!("{field}.material"),
-                    format!(
-                        "no material \"{}\" is defined (materials: {})",
-                        m.get_ref(),
-                        if known.is_empty() {
-                            "none".to_string()
-                        } else {
-                            known.join(", ")
-                        }
-                    ),
-                )
-            })?),
-        };
-        let rotation = |r: V3| {
-            let r = Vec3::from(r) * (std::f32::consts::PI / 180.0);
-            Quat::from_euler(EulerRot::ZYX, r.z, r.y, r.x)
-        };
+        let mat = self.material_id(src, spec, &field, o)?;
         let base = Keyframe {
             time: 0.0,
             translation: Vec3::from(o.translate),
@@ -583,84 +656,11 @@ fn build(src: &Source, spec: SceneSpec) -> Result<RenderScene, SceneError> {
         if let Some(m) = &o.mesh
             && is_gltf(m.get_ref())
         {
-            if !o.keyframes.is_empty() {
-                return Err(src.at(
-                    span,
-                    &format!("{field}.keyframes"),
-                    "keyframes move one instance; a glTF object places many (animate its nodes \
-                     by placing them as separate objects)",
-                ));
-            }
-            let l = super::gltf::read_file(&src.resolve(m.get_ref())).map_err(|e| {
-                let missing = missing_file(&e);
-                src.file_err(m.span(), &format!("{field}.mesh"), m.get_ref(), e, missing)
-            })?;
-            let (mesh_base, mat_base) = (meshes.len(), materials.len() as u32);
-            for mut sm in l.meshes {
-                match mat {
-                    Some(id) => sm.material.iter_mut().for_each(|x| *x = id),
-                    None => sm.material.iter_mut().for_each(|x| *x += mat_base),
-                }
-                meshes.push(sm);
-            }
-            if mat.is_none() {
-                materials.extend(l.materials);
-            }
-            for i in l.instances {
-                let inst = Instance::new(mesh_base + i.mesh, world * i.world_from_object);
-                inst.object_from_world(instances.len(), meshes.len())
-                    .map_err(|e| src.at(span.clone(), &field, e))?;
-                instances.push(inst);
-            }
-            gltf_lights.extend(l.lights);
-            continue;
+            return self.place_gltf(src, &field, span, o, m, mat, world);
         }
-        let key = match (&o.mesh, &o.shape) {
-            (Some(m), None) => format!("mesh:{}", m.get_ref()),
-            (None, Some(s)) => format!("shape:{s:?}"),
-            _ => {
-                return Err(src.at(span, &field, "give exactly one of `mesh` and `shape`"));
-            }
-        };
-        let mesh_id = match mesh_ids.get(&(key.clone(), mat)) {
-            Some(&id) => id,
-            None => {
-                let shaded = match (&o.mesh, &o.shape) {
-                    (Some(m), _) => {
-                        let path = src.resolve(m.get_ref());
-                        let file = crate::mesh_file::load_shaded(&path).map_err(|e| {
-                            src.file_err(m.span(), &format!("{field}.mesh"), m.get_ref(), e, None)
-                        })?;
-                        let mut shaded = file.mesh;
-                        match mat {
-                            Some(id) => shaded.material.iter_mut().for_each(|x| *x = id),
-                            None => {
-                                let base = materials.len() as u32;
-                                shaded.material.iter_mut().for_each(|x| *x += base);
-                                materials.extend(file.materials);
-                            }
-                        }
-                        shaded
-                    }
-                    (None, Some(s)) => {
-                        let id = match mat {
-                            Some(id) => id,
-                            None => {
-                                materials.push(crate::mesh_file::default_material());
-                                materials.len() as u32 - 1
-                            }
-                        };
-                        shape(s, id)
-                    }
-                    _ => unreachable!("checked above"),
-                };
-                meshes.push(shaded);
-                mesh_ids.insert((key, mat), meshes.len() - 1);
-                meshes.len() - 1
-            }
-        };
+        let mesh_id = self.mesh_id(src, &field, span.clone(), o, mat)?;
         let inst = Instance::new(mesh_id, world);
-        inst.object_from_world(instances.len(), meshes.len())
+        inst.object_from_world(self.instances.len(), self.meshes.len())
             .map_err(|_| {
                 src.at(
                     span.clone(),
@@ -683,71 +683,153 @@ fn build(src: &Source, spec: SceneSpec) -> Result<RenderScene, SceneError> {
                 });
             }
             let m = InstanceMotion {
-                instance: instances.len(),
+                instance: self.instances.len(),
                 keys,
             };
             if let Some(p) = m.problem() {
                 return Err(src.at(span, &format!("{field}.keyframes"), p));
             }
-            motion.push(m);
+            self.motion.push(m);
         }
-        instances.push(inst);
-    }
-    if instances.is_empty() {
-        return Err(SceneError::Syntax {
-            path: src.path.to_path_buf(),
-            line: 1,
-            column: 1,
-            problem: "objects: the scene has no object (add an [[objects]] table)".to_string(),
-        });
+        self.instances.push(inst);
+        Ok(())
     }
 
-    let mut lights = gltf_lights;
-    for (k, l) in spec.lights.iter().enumerate() {
-        // A setting out of range is the scene file's error, not its file's (even when the
-        // light's file was fetched by the set-up).
-        let light = make_light(src, l.get_ref(), k as u64).map_err(|e| match l.get_ref() {
-            LightSpec::Goniodiagram { file, .. } | LightSpec::Environment { file, .. }
-                if !matches!(e, light::LightError::BadParameter { .. }) =>
-            {
-                src.file_err(l.span(), &format!("lights[{k}].file"), file, e, None)
-            }
-            _ => src.at(l.span(), &format!("lights[{k}]"), e),
+    /// The id of the object's `material`, if it names one.
+    fn material_id(
+        &self,
+        src: &Source,
+        spec: &SceneSpec,
+        field: &str,
+        o: &ObjectSpec,
+    ) -> Result<Option<u32>, SceneError> {
+        Ok(match &o.material {
+            None => None,
+            Some(m) => Some(*self.ids.get(m.get_ref()).ok_or_else(|| {
+                let known: Vec<_> = spec.materials.keys().map(String::as_str).collect();
+                src.at(
+                    m.span(),
+                    &format!("{field}.material"),
+                    format!(
+                        "no material \"{}\" is defined (materials: {})",
+                        m.get_ref(),
+                        if known.is_empty() {
+                            "none".to_string()
+                        } else {
+                            known.join(", ")
+                        }
+                    ),
+                )
+            })?),
+        })
+    }
+
+    /// Places a glTF file's nodes, with its materials (unless the object names one) and its
+    /// lights.
+    #[allow(clippy::too_many_arguments)]
+    fn place_gltf(
+        &mut self,
+        src: &Source,
+        field: &str,
+        span: Range<usize>,
+        o: &ObjectSpec,
+        m: &Spanned<String>,
+        mat: Option<u32>,
+        world: glam::Affine3A,
+    ) -> Result<(), SceneError> {
+        if !o.keyframes.is_empty() {
+            return Err(src.at(
+                span,
+                &format!("{field}.keyframes"),
+                "keyframes move one instance; a glTF object places many (animate its nodes \
+                 by placing them as separate objects)",
+            ));
+        }
+        let l = super::gltf::read_file(&src.resolve(m.get_ref())).map_err(|e| {
+            let missing = missing_file(&e);
+            src.file_err(m.span(), &format!("{field}.mesh"), m.get_ref(), e, missing)
         })?;
-        lights.push(light);
+        let (mesh_base, mat_base) = (self.meshes.len(), self.materials.len() as u32);
+        for mut sm in l.meshes {
+            match mat {
+                Some(id) => sm.material.iter_mut().for_each(|x| *x = id),
+                None => sm.material.iter_mut().for_each(|x| *x += mat_base),
+            }
+            self.meshes.push(sm);
+        }
+        if mat.is_none() {
+            self.materials.extend(l.materials);
+        }
+        for i in l.instances {
+            let inst = Instance::new(mesh_base + i.mesh, world * i.world_from_object);
+            inst.object_from_world(self.instances.len(), self.meshes.len())
+                .map_err(|e| src.at(span.clone(), field, e))?;
+            self.instances.push(inst);
+        }
+        self.gltf_lights.extend(l.lights);
+        Ok(())
     }
 
-    let scene = RenderScene {
-        name,
-        meshes,
-        instances,
-        materials,
-        lights,
-        camera,
-        width,
-        height,
-        depth: spec.depth.unwrap_or(1),
-        spp: spec.spp,
-        accuracy: spec.accuracy,
-        tonemap,
-        background: spec.background,
-        motion,
-    };
-    scene.validate().map_err(|e| match e {
-        // At the key's line when it is a top-level key of the file (`spp = 0`), else naming
-        // the file without a line.
-        SceneError::Invalid { field, problem, .. } => match src.key_line(&field) {
-            Some((line, column)) => SceneError::Syntax {
-                path: src.path.to_path_buf(),
-                line,
-                column,
-                problem: format!("{field}: {problem}"),
-            },
-            None => SceneError::invalid(src.path.display().to_string(), field, problem),
-        },
-        e => e,
-    })?;
-    Ok(scene)
+    /// The object's mesh, built on its first use with its material.
+    fn mesh_id(
+        &mut self,
+        src: &Source,
+        field: &str,
+        span: Range<usize>,
+        o: &ObjectSpec,
+        mat: Option<u32>,
+    ) -> Result<usize, SceneError> {
+        let key = match (&o.mesh, &o.shape) {
+            (Some(m), None) => format!("mesh:{}", m.get_ref()),
+            (None, Some(s)) => format!("shape:{s:?}"),
+            _ => {
+                return Err(src.at(span, field, "give exactly one of `mesh` and `shape`"));
+            }
+        };
+        Ok(match self.mesh_ids.get(&(key.clone(), mat)) {
+            Some(&id) => id,
+            None => {
+                let shaded = match (&o.mesh, &o.shape) {
+                    (Some(m), _) => {
+                        let path = src.resolve(m.get_ref());
+                        let file = crate::mesh_file::load_shaded(&path).map_err(|e| {
+                            src.file_err(m.span(), &format!("{field}.mesh"), m.get_ref(), e, None)
+                        })?;
+                        let mut shaded = file.mesh;
+                        match mat {
+                            Some(id) => shaded.material.iter_mut().for_each(|x| *x = id),
+                            None => {
+                                let base = self.materials.len() as u32;
+                                shaded.material.iter_mut().for_each(|x| *x += base);
+                                self.materials.extend(file.materials);
+                            }
+                        }
+                        shaded
+                    }
+                    (None, Some(s)) => {
+                        let id = match mat {
+                            Some(id) => id,
+                            None => {
+                                self.materials.push(crate::mesh_file::default_material());
+                                self.materials.len() as u32 - 1
+                            }
+                        };
+                        shape(s, id)
+                    }
+                    _ => unreachable!("checked above"),
+                };
+                self.meshes.push(shaded);
+                self.mesh_ids.insert((key, mat), self.meshes.len() - 1);
+                self.meshes.len() - 1
+            }
+        })
+    }
+}
+
+/// An object's rotation from its Euler angles in degrees.
+fn rotation(r: V3) -> Quat {
+    let r = Vec3::from(r) * (std::f32::consts::PI / 180.0);
+    Quat::from_euler(EulerRot::ZYX, r.z, r.y, r.x)
 }
 
 /// Whether `file` names a glTF file (placed as a whole: its nodes, materials and lights).

@@ -126,8 +126,47 @@ fn read(path: &Path, bytes: &[u8]) -> Result<Loaded, SceneError> {
         .map_err(|e| err(path, format!("not a readable glTF 2.0 file: {e}")))?;
     let dir = path.parent().unwrap_or(Path::new("."));
     let doc = &gltf.document;
+    let buffers = buffers(path, dir, &gltf)?;
+
+    // Materials; the last is the default for primitives without one.
+    let mut textures: HashMap<usize, Arc<crate::texture::Texture>> = HashMap::new();
+    let mut materials = Vec::new();
+    for m in doc.materials() {
+        materials.push(material(path, dir, &buffers, &m, &mut textures)?);
+    }
+    let default_material = materials.len() as u32;
+    materials.push(crate::mesh_file::default_material());
+
+    // Meshes: one ShadedMesh per glTF mesh, its triangle primitives merged.
+    let mut meshes = Vec::new();
+    let mut skipped_primitives = 0;
+    for mesh in doc.meshes() {
+        meshes.push(shaded_mesh(
+            path,
+            &buffers,
+            &mesh,
+            default_material,
+            &mut skipped_primitives,
+        )?);
+    }
+    let (instances, lights, camera) = nodes(path, doc, &meshes)?;
+    if instances.is_empty() {
+        return Err(err(path, "the scene places no triangle mesh"));
+    }
+    Ok(Loaded {
+        meshes,
+        instances,
+        materials,
+        lights,
+        camera,
+        skipped_primitives,
+    })
+}
+
+/// The file's buffers: the GLB binary chunk, data URIs and files beside it.
+fn buffers(path: &Path, dir: &Path, gltf: &gltf::Gltf) -> Result<Vec<Vec<u8>>, SceneError> {
     let mut buffers = Vec::new();
-    for b in doc.buffers() {
+    for b in gltf.document.buffers() {
         let data = match b.source() {
             gltf::buffer::Source::Bin => gltf
                 .blob
@@ -148,115 +187,118 @@ fn read(path: &Path, bytes: &[u8]) -> Result<Loaded, SceneError> {
         }
         buffers.push(data);
     }
+    Ok(buffers)
+}
 
-    // Materials; the last is the default for primitives without one.
-    let mut textures: HashMap<usize, Arc<crate::texture::Texture>> = HashMap::new();
-    let mut materials = Vec::new();
-    for m in doc.materials() {
-        materials.push(material(path, dir, &buffers, &m, &mut textures)?);
-    }
-    let default_material = materials.len() as u32;
-    materials.push(crate::mesh_file::default_material());
-
-    // Meshes: one ShadedMesh per glTF mesh, its triangle primitives merged.
-    let mut meshes = Vec::new();
-    let mut skipped_primitives = 0;
-    for mesh in doc.meshes() {
-        let name = mesh
-            .name()
-            .map_or_else(|| format!("mesh {}", mesh.index()), str::to_string);
-        let mut positions: Vec<Vec3> = Vec::new();
-        let mut normals: Vec<Vec3> = Vec::new();
-        let mut uvs: Vec<Vec2> = Vec::new();
-        let mut indices = Vec::new();
-        let mut material_ids = Vec::new();
-        let (mut all_normals, mut all_uvs) = (true, true);
-        for prim in mesh.primitives() {
-            if prim.mode() != gltf::mesh::Mode::Triangles {
-                skipped_primitives += 1;
-                continue;
-            }
-            // The gltf crate reads any accessor as the type asked for; the format requires
-            // positions to be three floats.
-            if let Some(a) = prim.get(&gltf::Semantic::Positions)
-                && (a.dimensions() != gltf::accessor::Dimensions::Vec3
-                    || a.data_type() != gltf::accessor::DataType::F32)
-            {
-                return Err(err(
-                    path,
-                    format!(
-                        "mesh '{name}': POSITION accessor {} is {:?} of {:?}, not VEC3 of \
-                         FLOAT",
-                        a.index(),
-                        a.dimensions(),
-                        a.data_type()
-                    ),
-                ));
-            }
-            let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-            let Some(p) = reader.read_positions() else {
-                return Err(err(
-                    path,
-                    format!("mesh '{name}': a primitive without positions"),
-                ));
-            };
-            let base = positions.len() as u32;
-            positions.extend(p.map(Vec3::from));
-            let count = positions.len() - base as usize;
-            match reader.read_normals() {
-                Some(n) => {
-                    normals.extend(n.map(|v| Vec3::from(v).try_normalize().unwrap_or(Vec3::Z)))
-                }
-                None => all_normals = false,
-            }
-            match reader.read_tex_coords(0) {
-                Some(t) => uvs.extend(t.into_f32().map(Vec2::from)),
-                None => all_uvs = false,
-            }
-            let idx: Vec<u32> = match reader.read_indices() {
-                Some(i) => i.into_u32().collect(),
-                None => (0..count as u32).collect(),
-            };
-            if !idx.len().is_multiple_of(3) {
-                return Err(err(
-                    path,
-                    format!("mesh '{name}': {} indices, not a multiple of 3", idx.len()),
-                ));
-            }
-            if let Some(&bad) = idx.iter().find(|&&i| i as usize >= count) {
-                return Err(err(
-                    path,
-                    format!("mesh '{name}': index {bad} is out of range ({count} vertices)"),
-                ));
-            }
-            let mat = prim
-                .material()
-                .index()
-                .map_or(default_material, |i| i as u32);
-            for t in idx.chunks_exact(3) {
-                indices.push([base + t[0], base + t[1], base + t[2]]);
-                material_ids.push(mat);
-            }
+/// One glTF mesh, its triangle primitives merged (other primitives are counted in
+/// `skipped_primitives`), with the file's normals and UVs where every primitive has them.
+fn shaded_mesh(
+    path: &Path,
+    buffers: &[Vec<u8>],
+    mesh: &gltf::Mesh<'_>,
+    default_material: u32,
+    skipped_primitives: &mut usize,
+) -> Result<ShadedMesh, SceneError> {
+    let name = mesh
+        .name()
+        .map_or_else(|| format!("mesh {}", mesh.index()), str::to_string);
+    let mut positions: Vec<Vec3> = Vec::new();
+    let mut normals: Vec<Vec3> = Vec::new();
+    let mut uvs: Vec<Vec2> = Vec::new();
+    let mut indices = Vec::new();
+    let mut material_ids = Vec::new();
+    let (mut all_normals, mut all_uvs) = (true, true);
+    for prim in mesh.primitives() {
+        if prim.mode() != gltf::mesh::Mode::Triangles {
+            *skipped_primitives += 1;
+            continue;
         }
-        let n = positions.len();
-        let shaded = ShadedMesh {
-            mesh: Mesh::new(name, positions, indices),
-            normals: None,
-            uvs: (all_uvs && uvs.len() == n).then_some(uvs),
-            material: material_ids,
+        // The gltf crate reads any accessor as the type asked for; the format requires
+        // positions to be three floats.
+        if let Some(a) = prim.get(&gltf::Semantic::Positions)
+            && (a.dimensions() != gltf::accessor::Dimensions::Vec3
+                || a.data_type() != gltf::accessor::DataType::F32)
+        {
+            return Err(err(
+                path,
+                format!(
+                    "mesh '{name}': POSITION accessor {} is {:?} of {:?}, not VEC3 of \
+                     FLOAT",
+                    a.index(),
+                    a.dimensions(),
+                    a.data_type()
+                ),
+            ));
+        }
+        let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+        let Some(p) = reader.read_positions() else {
+            return Err(err(
+                path,
+                format!("mesh '{name}': a primitive without positions"),
+            ));
         };
-        let shaded = if all_normals && normals.len() == n {
-            ShadedMesh {
-                normals: Some(normals),
-                ..shaded
-            }
-        } else {
-            shaded.with_smooth_normals()
+        let base = positions.len() as u32;
+        positions.extend(p.map(Vec3::from));
+        let count = positions.len() - base as usize;
+        match reader.read_normals() {
+            Some(n) => normals.extend(n.map(|v| Vec3::from(v).try_normalize().unwrap_or(Vec3::Z))),
+            None => all_normals = false,
+        }
+        match reader.read_tex_coords(0) {
+            Some(t) => uvs.extend(t.into_f32().map(Vec2::from)),
+            None => all_uvs = false,
+        }
+        let idx: Vec<u32> = match reader.read_indices() {
+            Some(i) => i.into_u32().collect(),
+            None => (0..count as u32).collect(),
         };
-        meshes.push(shaded);
+        if !idx.len().is_multiple_of(3) {
+            return Err(err(
+                path,
+                format!("mesh '{name}': {} indices, not a multiple of 3", idx.len()),
+            ));
+        }
+        if let Some(&bad) = idx.iter().find(|&&i| i as usize >= count) {
+            return Err(err(
+                path,
+                format!("mesh '{name}': index {bad} is out of range ({count} vertices)"),
+            ));
+        }
+        let mat = prim
+            .material()
+            .index()
+            .map_or(default_material, |i| i as u32);
+        for t in idx.chunks_exact(3) {
+            indices.push([base + t[0], base + t[1], base + t[2]]);
+            material_ids.push(mat);
+        }
     }
+    let n = positions.len();
+    let shaded = ShadedMesh {
+        mesh: Mesh::new(name, positions, indices),
+        normals: None,
+        uvs: (all_uvs && uvs.len() == n).then_some(uvs),
+        material: material_ids,
+    };
+    let shaded = if all_normals && normals.len() == n {
+        ShadedMesh {
+            normals: Some(normals),
+            ..shaded
+        }
+    } else {
+        shaded.with_smooth_normals()
+    };
+    Ok(shaded)
+}
 
-    // Nodes of the default scene (or the first), with their world transforms.
+/// The nodes of the default scene (or the first), with their world transforms: the mesh
+/// instances, the punctual lights and the first perspective camera.
+#[allow(clippy::type_complexity)]
+fn nodes(
+    path: &Path,
+    doc: &gltf::Document,
+    meshes: &[ShadedMesh],
+) -> Result<(Vec<Instance>, Vec<Light>, Option<Camera>), SceneError> {
     let mut instances = Vec::new();
     let mut lights = Vec::new();
     let mut camera = None;
@@ -310,44 +352,43 @@ fn read(path: &Path, bytes: &[u8]) -> Result<Loaded, SceneError> {
             });
         }
         if let Some(l) = node.light() {
-            let c = l.color();
-            let w = l.intensity() * WATTS_PER_LUMEN;
-            let rgb = [c[0] * w, c[1] * w, c[2] * w];
-            let name = l.name().unwrap_or("light").to_string();
-            let light = match l.kind() {
-                gltf::khr_lights_punctual::Kind::Point => Omni::new(origin, rgb).map(Light::Omni),
-                gltf::khr_lights_punctual::Kind::Directional => {
-                    Parallel::new(forward, rgb).map(Light::Parallel)
-                }
-                gltf::khr_lights_punctual::Kind::Spot {
-                    inner_cone_angle,
-                    outer_cone_angle,
-                } => Spot::new(
-                    origin,
-                    forward,
-                    rgb,
-                    inner_cone_angle,
-                    outer_cone_angle,
-                    SpotFalloff::default(),
-                )
-                .map(Light::Spot),
-            }
-            .map_err(|e| err(path, format!("light '{name}': {e}")))?;
-            lights.push(light);
+            lights.push(light(path, &l, origin, forward)?);
         }
         stack.extend(node.children().map(|c| (c, world)));
     }
-    if instances.is_empty() {
-        return Err(err(path, "the scene places no triangle mesh"));
+    Ok((instances, lights, camera))
+}
+
+/// A punctual light (`KHR_lights_punctual`) at `origin`, shining along `forward`.
+fn light(
+    path: &Path,
+    l: &gltf::khr_lights_punctual::Light<'_>,
+    origin: Vec3,
+    forward: Vec3,
+) -> Result<Light, SceneError> {
+    let c = l.color();
+    let w = l.intensity() * WATTS_PER_LUMEN;
+    let rgb = [c[0] * w, c[1] * w, c[2] * w];
+    let name = l.name().unwrap_or("light").to_string();
+    match l.kind() {
+        gltf::khr_lights_punctual::Kind::Point => Omni::new(origin, rgb).map(Light::Omni),
+        gltf::khr_lights_punctual::Kind::Directional => {
+            Parallel::new(forward, rgb).map(Light::Parallel)
+        }
+        gltf::khr_lights_punctual::Kind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        } => Spot::new(
+            origin,
+            forward,
+            rgb,
+            inner_cone_angle,
+            outer_cone_angle,
+            SpotFalloff::default(),
+        )
+        .map(Light::Spot),
     }
-    Ok(Loaded {
-        meshes,
-        instances,
-        materials,
-        lights,
-        camera,
-        skipped_primitives,
-    })
+    .map_err(|e| err(path, format!("light '{name}': {e}")))
 }
 
 /// A metallic-roughness material as ours: diffuse = base colour x (1 - metallic) (times the

@@ -9,6 +9,11 @@
 //! - [`TriAccel`]: the projection ray-triangle test shared by the accelerators of this family,
 //!   and [`edges::mesh_records`]: a mesh's records, the band beyond edges on shared ones only.
 //! - [`BruteForce`]: the reference implementation for tests.
+//! - [`shapes`]: mesh generators (boxes, spheres, tori, terrain) for scenes.
+//!
+//! With the cargo feature `fixtures`, for tests, benches and experiments only: `scenes` (the
+//! generated test scenes with their views and lights), `testing` (the checks every
+//! accelerator's tests share) and `workload` (the rays and timed loops of the comparisons).
 
 pub mod aabb;
 pub mod accel;
@@ -20,11 +25,14 @@ pub mod mesh;
 pub mod packet;
 pub mod ray;
 pub mod scene;
+#[cfg(any(test, feature = "fixtures"))]
 pub mod scenes;
 pub mod shapes;
+#[cfg(any(test, feature = "fixtures"))]
 pub mod testing;
 pub mod triangle;
 pub mod work;
+#[cfg(any(test, feature = "fixtures"))]
 pub mod workload;
 
 pub use aabb::Aabb;

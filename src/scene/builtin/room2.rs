@@ -54,7 +54,59 @@ pub fn room2() -> RenderScene {
     let ceramic = b.material(Material::phong("ceramic", [0.7, 0.25, 0.2], [0.5; 3], 80.0));
     let chrome = b.material(mirror("chrome", 0.8));
 
-    // The room: 6 x 3 x 6, every wall facing in.
+    walls(&mut b, floor, ceiling, plaster);
+    furniture(&mut b, oak);
+    let v = Vec3::new;
+    b.add(superellipsoid(
+        "sofa",
+        v(1.1, 0.4, 0.45),
+        (0.25, 0.25),
+        (48, 24),
+        fabric,
+    ));
+    b.instances.last_mut().expect("placed").world_from_object =
+        Affine3A::from_translation(v(0.6, 0.4, -2.4));
+    let shade_profile: Vec<(f32, f32)> = (0..20)
+        .map(|k| (0.3 - 0.012 * k as f32, 0.02 * k as f32))
+        .collect();
+    b.add(lathe("lamp shade", &shade_profile, 40, shade));
+    b.instances.last_mut().expect("placed").world_from_object =
+        Affine3A::from_translation(v(2.4, 1.2, -2.4));
+    b.add(torus("bowl", 0.18, 0.05, (32, 16), ceramic));
+    b.instances.last_mut().expect("placed").world_from_object =
+        Affine3A::from_translation(v(0.3, 0.82, 0.2));
+    let ball = b.mesh(
+        ShadedMesh::flat(icosphere("ball", Vec3::ZERO, 1.0, 2), chrome).with_smooth_normals(),
+    );
+    b.place(
+        ball,
+        Affine3A::from_scale_rotation_translation(
+            Vec3::splat(0.12),
+            Quat::IDENTITY,
+            v(0.8, 0.89, 0.35),
+        ),
+    );
+    b.place(
+        ball,
+        Affine3A::from_scale_rotation_translation(
+            Vec3::splat(0.25),
+            Quat::IDENTITY,
+            v(1.8, 0.25, 1.5),
+        ),
+    );
+
+    let lights = lights();
+    let camera = Camera {
+        position: v(2.4, 1.7, 2.7),
+        look_at: v(-0.3, 0.7, -0.5),
+        up: Vec3::Y,
+        vfov_deg: 60.0,
+    };
+    b.finish("room2", camera, lights, 1, [0.0; 3])
+}
+
+/// The room: 6 x 3 x 6, every wall facing in.
+fn walls(b: &mut Builder, floor: u32, ceiling: u32, plaster: u32) {
     let (x0, x1, z0, z1, h) = (-3.0, 3.0, -3.0, 3.0, 3.0);
     let v = Vec3::new;
     b.add(quad(
@@ -111,8 +163,11 @@ pub fn room2() -> RenderScene {
         1.0,
         plaster,
     ));
+}
 
-    // Boxes: table, chairs and a shelf, instances of one unit cube.
+/// Boxes: table, chairs and a shelf, instances of one unit cube.
+fn furniture(b: &mut Builder, oak: u32) {
+    let v = Vec3::new;
     let cube = b.mesh(ShadedMesh::flat(
         cuboid("cube", Vec3::splat(-0.5), Vec3::splat(0.5)),
         oak,
@@ -123,9 +178,9 @@ pub fn room2() -> RenderScene {
             Affine3A::from_scale_rotation_translation(s, Quat::from_rotation_y(a), c),
         );
     };
-    block(&mut b, v(0.3, 0.74, 0.2), v(1.6, 0.06, 0.9), 0.0);
+    block(b, v(0.3, 0.74, 0.2), v(1.6, 0.06, 0.9), 0.0);
     for (x, z) in [(-0.4, -0.15), (1.0, -0.15), (-0.4, 0.55), (1.0, 0.55)] {
-        block(&mut b, v(x, 0.36, z), v(0.06, 0.72, 0.06), 0.0);
+        block(b, v(x, 0.36, z), v(0.06, 0.72, 0.06), 0.0);
     }
     for (cx, cz, a) in [
         (0.3_f32, 1.1_f32, 0.0_f32),
@@ -133,15 +188,15 @@ pub fn room2() -> RenderScene {
     ] {
         let (s, c) = a.sin_cos();
         let at = |dx: f32, y: f32, dz: f32| v(cx + c * dx + s * dz, y, cz - s * dx + c * dz);
-        block(&mut b, at(0.0, 0.45, 0.0), v(0.45, 0.05, 0.45), a);
-        block(&mut b, at(0.0, 0.75, 0.2), v(0.45, 0.6, 0.05), a);
+        block(b, at(0.0, 0.45, 0.0), v(0.45, 0.05, 0.45), a);
+        block(b, at(0.0, 0.75, 0.2), v(0.45, 0.6, 0.05), a);
         for (dx, dz) in [(-0.2, -0.2), (0.2, -0.2), (-0.2, 0.2), (0.2, 0.2)] {
-            block(&mut b, at(dx, 0.22, dz), v(0.04, 0.44, 0.04), a);
+            block(b, at(dx, 0.22, dz), v(0.04, 0.44, 0.04), a);
         }
     }
     for k in 0..5 {
         block(
-            &mut b,
+            b,
             v(-2.8, 0.4 + 0.45 * k as f32, -1.0),
             v(0.35, 0.04, 1.6),
             0.0,
@@ -149,48 +204,14 @@ pub fn room2() -> RenderScene {
     }
     for k in 0..5 {
         let z = -1.8 + 0.4 * k as f32;
-        block(&mut b, v(-2.8, 1.2, z), v(0.35, 2.0, 0.04), 0.0);
+        block(b, v(-2.8, 1.2, z), v(0.35, 2.0, 0.04), 0.0);
     }
+}
 
-    b.add(superellipsoid(
-        "sofa",
-        v(1.1, 0.4, 0.45),
-        (0.25, 0.25),
-        (48, 24),
-        fabric,
-    ));
-    b.instances.last_mut().expect("placed").world_from_object =
-        Affine3A::from_translation(v(0.6, 0.4, -2.4));
-    let shade_profile: Vec<(f32, f32)> = (0..20)
-        .map(|k| (0.3 - 0.012 * k as f32, 0.02 * k as f32))
-        .collect();
-    b.add(lathe("lamp shade", &shade_profile, 40, shade));
-    b.instances.last_mut().expect("placed").world_from_object =
-        Affine3A::from_translation(v(2.4, 1.2, -2.4));
-    b.add(torus("bowl", 0.18, 0.05, (32, 16), ceramic));
-    b.instances.last_mut().expect("placed").world_from_object =
-        Affine3A::from_translation(v(0.3, 0.82, 0.2));
-    let ball = b.mesh(
-        ShadedMesh::flat(icosphere("ball", Vec3::ZERO, 1.0, 2), chrome).with_smooth_normals(),
-    );
-    b.place(
-        ball,
-        Affine3A::from_scale_rotation_translation(
-            Vec3::splat(0.12),
-            Quat::IDENTITY,
-            v(0.8, 0.89, 0.35),
-        ),
-    );
-    b.place(
-        ball,
-        Affine3A::from_scale_rotation_translation(
-            Vec3::splat(0.25),
-            Quat::IDENTITY,
-            v(1.8, 0.25, 1.5),
-        ),
-    );
-
-    let lights = vec![
+/// A rectangular ceiling light, a goniodiagram downlight, the lamp's omni light and a spot.
+fn lights() -> Vec<Light> {
+    let v = Vec3::new;
+    vec![
         Light::Rectangular(
             Rectangular::new(
                 v(-0.5, 2.98, -0.5),
@@ -227,12 +248,5 @@ pub fn room2() -> RenderScene {
             )
             .expect("valid"),
         ),
-    ];
-    let camera = Camera {
-        position: v(2.4, 1.7, 2.7),
-        look_at: v(-0.3, 0.7, -0.5),
-        up: Vec3::Y,
-        vfov_deg: 60.0,
-    };
-    b.finish("room2", camera, lights, 1, [0.0; 3])
+    ]
 }
