@@ -9,7 +9,7 @@
 //! refraction rays, the BSP, the preferred backend of 4, 8 and 16 lanes usable here (hand-written on x86-64).
 //! Per scene and backend, one untimed frame each way (the images, compared by PSNR as
 //! displayed: tone-mapped, channels clipped to [0, 1]; and the packet counts), then
-//! [`ROUNDS`] rounds alternate the two (which goes first alternates too); `seconds` is the
+//! `ROUNDS` rounds alternate the two (which goes first alternates too); `seconds` is the
 //! median, `speedup` = seconds without regrouping / this row's, `spread` = the slowest round
 //! / the fastest: this machine's run-to-run noise, measured on the very frames compared.
 

@@ -6,7 +6,7 @@
 //! threads are a rayon pool installed around the render, as `coherent render --threads T`
 //! does. Per scene and backend, every thread count renders once untimed, then rounds visit
 //! every thread count in turn; `seconds` is the median. There are 3 rounds, or as many as make
-//! the 1-thread frames add up to [`TIMED_SECONDS`] (at most [`MAX_ROUNDS`]): a 0.1 s frame
+//! the 1-thread frames add up to `TIMED_SECONDS` (at most `MAX_ROUNDS`): a 0.1 s frame
 //! varies by more, relative to its length, than a 2 s one, and 2 threads' speedup is read off it.
 
 use std::collections::BTreeMap;

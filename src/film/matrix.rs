@@ -186,7 +186,7 @@ impl Film {
 }
 
 impl Drop for Film {
-    /// The matrices go to the next film of this size (see [`spare`]).
+    /// The matrices go to the next film of this size (see `spare`).
     fn drop(&mut self) {
         spare::keep(std::mem::take(&mut self.matrices));
     }

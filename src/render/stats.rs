@@ -96,7 +96,7 @@ impl StageClock {
     }
 }
 
-/// What one [`StageClock`] lap costs on this machine, in nanoseconds: an empty lap (a clock
+/// What one `StageClock` lap costs on this machine, in nanoseconds: an empty lap (a clock
 /// read and the book-keeping, nothing timed between two laps), timed over runs of 20,000
 /// laps, the fastest of 9 runs. Measured once per process, the first time it is asked for.
 ///

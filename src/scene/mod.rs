@@ -194,7 +194,7 @@ impl RenderScene {
 /// Mesh file extensions [`load`] takes as a bare mesh (besides `.gltf` and `.glb`).
 pub const MESH_EXTENSIONS: [&str; 3] = ["obj", "ply", "off"];
 
-/// A scene file (.toml, see [`file`]), a built-in scene's name, or a bare mesh file (framed by a default
+/// A scene file (.toml, see [`file`](mod@file)), a built-in scene's name, or a bare mesh file (framed by a default
 /// camera and light).
 pub fn load(spec: &str) -> Result<RenderScene, SceneError> {
     let path = Path::new(spec);

@@ -3,7 +3,7 @@
 //! to packets of pixels with the range-reduced power `x^y = Max^y e^(y ln(x / Max))` of
 //! [`coherent_simd::approx::PowRange`].
 //!
-//! The paper uses the operator of its reference [22] (Barladian et al. 2004), whose formula
+//! The paper uses the operator of its reference \[22\] (Barladian et al. 2004), whose formula
 //! is not given. [`Operator::Tumblin`] stands in for it: Tumblin and Rushmeier's 1993
 //! operator has exactly the ingredients the paper names (a log-average adaptation
 //! luminance and one power per pixel with an exponent shared by the image). Reinhard et
@@ -25,7 +25,7 @@ use coherent_simd::{Lanes, Rgbs, SimdF32, SimdMask};
 /// A global tone-mapping operator.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Operator {
-    /// Tumblin and Rushmeier 1993 (standing in for the paper's reference [22]).
+    /// Tumblin and Rushmeier 1993 (standing in for the paper's reference \[22\]).
     #[default]
     Tumblin,
     /// Reinhard et al. 2002, global operator with white point.

@@ -356,7 +356,7 @@ impl<S: Simd> Lanes for PulpLanes<S> {
         PM32(s.equal_i32s(b, lanes), s)
     }
     /// Lane by lane through an array (pulp has no gather), after one vector bounds check; at
-    /// 16 lanes as halves of 8-byte words (see [`PulpLanes::gather_by_pairs`]).
+    /// 16 lanes as halves of 8-byte words (see `PulpLanes::gather_by_pairs`).
     #[inline(always)]
     fn gather(self, table: &[f32], idx: PI32<S>) -> PF32<S> {
         let ix = idx.checked(table.len());

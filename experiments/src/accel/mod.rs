@@ -20,7 +20,7 @@
 //! Samples (one pass over all rays, the thread's CPU time) are interleaved round-robin over
 //! the accelerators and widths of a scene and ray kind, and each row reports the median. One
 //! thread. Every row's hits and `t` sum are checked against the BSP's single rays; the run
-//! fails on a disagreement beyond the edge tolerance ([`HIT_TOLERANCE`], [`T_TOLERANCE`]).
+//! fails on a disagreement beyond the edge tolerance (`HIT_TOLERANCE`, `T_TOLERANCE`).
 //!
 //! The others: Embree gets packets of the same width (`rtcIntersect4/8/16`, the COHERENT
 //! flag for primary and shadow rays, not for diffuse rays), built with one thread, quality
