@@ -73,7 +73,7 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     let passes = ctx.pick(8, 64);
     let samples = ctx.pick(5, 15);
     let bar = ctx.progress((Approx::TIMED.len() * samples) as u64, "kernels");
-    let timing = Timing {
+    let timing = Rounds {
         backends: &backends,
         samples,
         bar: &bar,
@@ -150,13 +150,13 @@ type Samples = BTreeMap<Backend, Vec<f64>>;
 
 /// How the kernels are timed: samples interleaved round-robin over the backends, after one
 /// warm-up sample each.
-struct Timing<'a> {
+struct Rounds<'a> {
     backends: &'a [Backend],
     samples: usize,
     bar: &'a indicatif::ProgressBar,
 }
 
-impl Timing<'_> {
+impl Rounds<'_> {
     /// The samples of `f`, one sample a call, its result kept from the optimiser.
     fn run<T>(
         &self,
