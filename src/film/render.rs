@@ -98,37 +98,18 @@ pub fn render<T: SampleTracer>(
     let mut pending: Option<(Vec<bool>, bool)> = None;
     let stop = loop {
         // What this pass traces: an index range, its span, and which pixels still need rays.
-        let (span, begin, end, need) = match opts.method {
-            Method::Uniform { spp } => {
-                if pass == spp {
-                    break StopReason::Done;
-                }
-                let b = pass as u64 * tile.block();
-                (Span::for_block(tile, lanes), b, b + tile.block(), None)
-            }
-            Method::Adaptive {
-                accuracy,
-                max_samples_per_pixel,
-                time_budget,
-            } => {
-                if pass > 0 && time_budget.is_some_and(|t| start.elapsed() >= t) {
-                    break StopReason::TimeBudget;
-                }
-                // Which pixels need rays: computed once per pass (after the previous one).
-                let (need, capped) = pending
-                    .take()
-                    .unwrap_or_else(|| needed(&film, accuracy, max_samples_per_pixel));
-                if !need.iter().any(|&n| n) {
-                    break if capped {
-                        StopReason::SampleBudget
-                    } else {
-                        StopReason::Accuracy
-                    };
-                }
-                let span = levels[(pass as usize).min(levels.len() - 1)];
-                let b = next_index;
-                (span, b, b + span.value() * lanes as u64, Some(need))
-            }
+        let (span, begin, end, need) = match plan_pass(
+            opts,
+            &film,
+            start,
+            pass,
+            next_index,
+            lanes,
+            &levels,
+            &mut pending,
+        ) {
+            Ok(plan) => plan,
+            Err(stop) => break stop,
         };
         next_index = end;
         pass += 1;
@@ -158,19 +139,7 @@ pub fn render<T: SampleTracer>(
             coherence: coh,
         } = PassSums::of(outs, &mut fixups, &mut stats, T::merge_stats);
         rays += this_pass;
-        let done = match opts.method {
-            Method::Adaptive {
-                accuracy,
-                max_samples_per_pixel,
-                ..
-            } => {
-                let (need, capped) = needed(&film, accuracy, max_samples_per_pixel);
-                let done = need.iter().filter(|n| !**n).count() as f64 / film.pixels() as f64;
-                pending = Some((need, capped));
-                done
-            }
-            Method::Uniform { .. } => covered_fraction(&film),
-        };
+        let done = pass_done(opts, &film, &mut pending);
         record = PassRecord {
             pass,
             span,
@@ -201,6 +170,76 @@ pub fn render<T: SampleTracer>(
         fixups,
         stop,
     })
+}
+
+/// A pass's span, its range of sample indices and, when adaptive, which pixels need rays.
+type PassPlan = (Span, u64, u64, Option<Vec<bool>>);
+
+/// What pass `pass` traces: its span, the range of sample indices from `next_index` and, when
+/// adaptive, which pixels still need rays (from `pending`, the previous pass's, when it has
+/// it); or why the render stops before it.
+#[allow(clippy::too_many_arguments)]
+fn plan_pass(
+    opts: &FilmOptions,
+    film: &Film,
+    start: Instant,
+    pass: u32,
+    next_index: u64,
+    lanes: usize,
+    levels: &[Span],
+    pending: &mut Option<(Vec<bool>, bool)>,
+) -> Result<PassPlan, StopReason> {
+    let tile = opts.tile;
+    match opts.method {
+        Method::Uniform { spp } => {
+            if pass == spp {
+                return Err(StopReason::Done);
+            }
+            let b = pass as u64 * tile.block();
+            Ok((Span::for_block(tile, lanes), b, b + tile.block(), None))
+        }
+        Method::Adaptive {
+            accuracy,
+            max_samples_per_pixel,
+            time_budget,
+        } => {
+            if pass > 0 && time_budget.is_some_and(|t| start.elapsed() >= t) {
+                return Err(StopReason::TimeBudget);
+            }
+            // Which pixels need rays: computed once per pass (after the previous one).
+            let (need, capped) = pending
+                .take()
+                .unwrap_or_else(|| needed(film, accuracy, max_samples_per_pixel));
+            if !need.iter().any(|&n| n) {
+                return Err(if capped {
+                    StopReason::SampleBudget
+                } else {
+                    StopReason::Accuracy
+                });
+            }
+            let span = levels[(pass as usize).min(levels.len() - 1)];
+            let b = next_index;
+            Ok((span, b, b + span.value() * lanes as u64, Some(need)))
+        }
+    }
+}
+
+/// The fraction of the image done after a pass. When adaptive, also which pixels still need
+/// rays, kept in `pending` for the next pass's plan.
+fn pass_done(opts: &FilmOptions, film: &Film, pending: &mut Option<(Vec<bool>, bool)>) -> f64 {
+    match opts.method {
+        Method::Adaptive {
+            accuracy,
+            max_samples_per_pixel,
+            ..
+        } => {
+            let (need, capped) = needed(film, accuracy, max_samples_per_pixel);
+            let done = need.iter().filter(|n| !**n).count() as f64 / film.pixels() as f64;
+            *pending = Some((need, capped));
+            done
+        }
+        Method::Uniform { .. } => covered_fraction(film),
+    }
 }
 
 /// Traces one pass over `tiles`, each tile a copy of `job` at its own origin. Each tile files

@@ -108,8 +108,14 @@ impl<A: Accel> Renderer<'_, A> {
                 charge_beam(a, &pixels, packets, n, work, t0.elapsed().as_nanos() as f64);
                 stats.work += work;
             } else {
-                self.accel
-                    .intersect_beam(l, &rays, &active, &mut camera_hits);
+                // Out of the kernel, as the renderer's other queries (`Lanes::apart`).
+                l.apart(
+                    #[inline(always)]
+                    |l| {
+                        self.accel
+                            .intersect_beam(l, &rays, &active, &mut camera_hits)
+                    },
+                );
             }
             clock.lap(stats, Stage::Traversal);
         }

@@ -255,7 +255,14 @@ impl<'s, A: Accel> Renderer<'s, A> {
                         .intersect_work(l, &seg.rays, seg.active, &mut stats.work)
                 },
             ),
-            None => self.accel.intersect(l, &seg.rays, seg.active),
+            // The traversal is a function of its own per backend, like a kernel
+            // (`Lanes::apart`): inlined, it made each backend's frame kernel one function too
+            // large to optimise quickly (docs/architecture.md,
+            // "One renderer per backend").
+            None => l.apart(
+                #[inline(always)]
+                |l| self.accel.intersect(l, &seg.rays, seg.active),
+            ),
         };
         clock.lap(stats, Stage::Traversal);
         let hit = hits.hit_mask(l) & seg.active;
@@ -312,42 +319,9 @@ impl<'s, A: Accel> Renderer<'s, A> {
         // Each light, each of its samples, under its mask, with a shadow packet.
         let can_light = hit & ns.dot(wo).gt(zero);
         if can_light.any() {
-            for (li, light) in self.scene.lights.iter().enumerate() {
-                for k in 0..light.samples() {
-                    let stream =
-                        rng::hash1(seg.path.wrapping_mul(0x9e37_79b1) ^ ((li as u32) << 20) ^ k);
-                    let u = [
-                        rng::uniform(l, seg.light_ids, stream),
-                        rng::uniform(l, seg.light_ids, stream ^ 0x5555_5555),
-                    ];
-                    let ls = light.sample(l, &surf.p, &ns, can_light, k, u);
-                    let on = ls.active & can_light;
-                    if on.none() {
-                        clock.lap(stats, Stage::Lights);
-                        continue;
-                    }
-                    let shadow = shadow_rays(l, &surf.p, &ns, &ls);
-                    stats.count(RayKind::Shadow, on.count());
-                    clock.lap(stats, Stage::Lights);
-                    let blocked = if self.aov.is_some() {
-                        l.apart(
-                            #[inline(always)]
-                            |l| self.accel.occluded_work(l, &shadow, on, &mut stats.work),
-                        )
-                    } else {
-                        self.accel.occluded(l, &shadow, on)
-                    };
-                    let visible = on.and_not(blocked);
-                    clock.lap(stats, Stage::Shadows);
-                    if visible.none() {
-                        continue;
-                    }
-                    ctx.active = visible;
-                    let s = self.shade_materials(l, &mut ctx, None, &ls.wi, stats);
-                    lit += Rgbs::select(visible, s.reflected * ls.li, Rgbs::zero(l));
-                    clock.lap(stats, Stage::Shading);
-                }
-            }
+            self.light_passes(
+                l, seg, &surf, &ns, can_light, &mut ctx, &mut lit, &mut clock, stats,
+            );
         }
         *radiance += seg.throughput * lit;
 
@@ -355,6 +329,87 @@ impl<'s, A: Accel> Renderer<'s, A> {
             clock.lap(stats, Stage::Other);
             return;
         }
+        self.spawn_secondaries(l, seg, &surf, &ns, &ng, &base, hit, pending);
+        clock.lap(stats, Stage::Other);
+    }
+
+    /// Adds to `lit` what the lights give the lanes of `can_light`: each light, each of its
+    /// samples, under its mask, with a shadow packet through the occlusion query and a
+    /// material pass for the lanes it reaches.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn light_passes<L: Lanes>(
+        &self,
+        l: L,
+        seg: &Segment<L>,
+        surf: &Surface<L>,
+        ns: &Vec3s<L>,
+        can_light: L::Mask,
+        ctx: &mut ShadeHits<L>,
+        lit: &mut Rgbs<L>,
+        clock: &mut StageClock,
+        stats: &mut RenderStats,
+    ) {
+        for (li, light) in self.scene.lights.iter().enumerate() {
+            for k in 0..light.samples() {
+                let stream =
+                    rng::hash1(seg.path.wrapping_mul(0x9e37_79b1) ^ ((li as u32) << 20) ^ k);
+                let u = [
+                    rng::uniform(l, seg.light_ids, stream),
+                    rng::uniform(l, seg.light_ids, stream ^ 0x5555_5555),
+                ];
+                let ls = light.sample(l, &surf.p, ns, can_light, k, u);
+                let on = ls.active & can_light;
+                if on.none() {
+                    clock.lap(stats, Stage::Lights);
+                    continue;
+                }
+                let shadow = shadow_rays(l, &surf.p, ns, &ls);
+                stats.count(RayKind::Shadow, on.count());
+                clock.lap(stats, Stage::Lights);
+                let blocked = if self.aov.is_some() {
+                    l.apart(
+                        #[inline(always)]
+                        |l| self.accel.occluded_work(l, &shadow, on, &mut stats.work),
+                    )
+                } else {
+                    // Out of the kernel, as the first-hit query above.
+                    l.apart(
+                        #[inline(always)]
+                        |l| self.accel.occluded(l, &shadow, on),
+                    )
+                };
+                let visible = on.and_not(blocked);
+                clock.lap(stats, Stage::Shadows);
+                if visible.none() {
+                    continue;
+                }
+                ctx.active = visible;
+                let s = self.shade_materials(l, ctx, None, &ls.wi, stats);
+                *lit += Rgbs::select(visible, s.reflected * ls.li, Rgbs::zero(l));
+                clock.lap(stats, Stage::Shading);
+            }
+        }
+    }
+
+    /// Pushes the mirror reflection and refraction packets of the lanes of `hit` whose
+    /// material weights them, to be traced after this one.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn spawn_secondaries<L: Lanes>(
+        &self,
+        l: L,
+        seg: &Segment<L>,
+        surf: &Surface<L>,
+        ns: &Vec3s<L>,
+        ng: &Vec3s<L>,
+        base: &Shading<L>,
+        hit: L::Mask,
+        pending: &mut Vec<Segment<L>>,
+    ) {
+        let zero = l.splat(0.0);
+        let dir = seg.rays.dir;
+        let (ns, ng) = (*ns, *ng);
         let eps = (surf.p.x.abs().max(surf.p.y.abs()).max(surf.p.z.abs()) + 1.0) * 1e-4;
         // No closures here: one called twice may stay out of line, and outside the kernel's
         // `#[target_feature]` function every intrinsic becomes a call
@@ -421,7 +476,6 @@ impl<'s, A: Accel> Renderer<'s, A> {
                 });
             }
         }
-        clock.lap(stats, Stage::Other);
     }
 
     /// Shades the active lanes of `ctx` one material at a time (the paper's passes, counted
