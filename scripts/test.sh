@@ -15,6 +15,8 @@ export COHERENT_REQUIRE_HDR=1
 # And the real scenes' assets (every scenes/*.toml but the dungeon, which only the full
 # reproduce fetches: a 257 MB download).
 export COHERENT_REQUIRE_SCENES=1
+# And the accelerators' native libraries (Embree), where the registries have them.
+export COHERENT_REQUIRE_ACCELERATORS=1
 # A backend this CPU has must run, not be skipped: the list is computed here from the CPU's
 # flags (machines differ: some have AVX-512, some only AVX2), independently of the crate's own
 # detection. COHERENT_REQUIRE_BACKENDS set by the caller wins.
@@ -28,6 +30,7 @@ if [[ "$(uname -m)" != x86_64 && -z "${EMBREE_DIR:-}" ]]; then
         "no Embree 4 for $(uname -m) in the registries (set EMBREE_DIR to one built here)"
     exclude=(--exclude coherent-embree)
     skip=(-- --skip embree)
+    export COHERENT_REQUIRE_ACCELERATORS=0
 fi
 # Libraries, binaries and test targets, then the doc tests: not the examples, which
 # `cargo test` would build too (clippy --all-targets checks that they compile) and which

@@ -29,10 +29,12 @@ pub enum AccelKind {
 /// A name that is no accelerator, or one this build or machine cannot use.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum AccelChoiceError {
-    #[error(
-        "unknown accelerator `{name}`; accelerators: bsp, embree, obvhs, brute; usable here: {available}"
-    )]
-    Unknown { name: String, available: String },
+    #[error("unknown accelerator `{name}`; accelerators: {all}; usable here: {available}")]
+    Unknown {
+        name: String,
+        all: String,
+        available: String,
+    },
     #[error(
         "accelerator `{kind}` is not compiled in: build with the cargo feature `{kind}`; usable here: {available}"
     )]
@@ -125,6 +127,7 @@ impl FromStr for AccelKind {
             .find(|k| k.name().eq_ignore_ascii_case(s))
             .ok_or_else(|| AccelChoiceError::Unknown {
                 name: s.to_owned(),
+                all: Self::ALL.map(AccelKind::name).join(", "),
                 available: Self::available_list(),
             })?;
         if !kind.compiled() {

@@ -3,6 +3,7 @@
 //! `coherent info` describes the CPU, the build and the lane backends.
 
 use clap::{Parser, Subcommand};
+use coherent::accel_any::AccelKind;
 use coherent::machine::Machine;
 use coherent::simd::Backend;
 use std::io::{self, Write};
@@ -84,14 +85,9 @@ fn message(e: &anyhow::Error) -> String {
 struct RenderArgs {
     /// A scene file (.toml), a built-in scene's name, or a bare mesh file.
     scene: String,
-    /// Lane backend: scalar, sse, wide4, wide8, wide16, avx2, avx512 (hand-written), pulp8,
-    /// pulp16 (pulp's portable operations; pulp4 on aarch64), scalar-est (scalar with the
-    /// SIMD backends' rsqrt/recip estimates; x86-64) (default: the widest hand-written one
-    /// usable here, else the widest `wide`).
-    #[arg(long)]
+    #[arg(long, help = backend_help())]
     backend: Option<String>,
-    /// Accelerator: bsp, embree, obvhs, brute.
-    #[arg(long, default_value = "bsp")]
+    #[arg(long, default_value = "bsp", help = accel_help())]
     accel: String,
     /// How the BSP builds its object trees: `exact` (the O(N log N) sweep over every plane at
     /// every node) or `fast` (binned SAH above 256 references, the sweep below; subtrees in
@@ -353,4 +349,31 @@ fn obvhs_state() -> String {
     } else {
         "not compiled in (cargo feature `obvhs`)".to_owned()
     }
+}
+
+/// `--backend`'s help: every backend the dispatch module has, by family.
+fn backend_help() -> String {
+    let mut families = Backend::families();
+    families.extend(Backend::FACTORS.map(Backend::family));
+    let list: Vec<String> = families
+        .iter()
+        .map(|f| {
+            let names: Vec<&str> = Backend::every()
+                .filter(|b| b.family() == *f)
+                .map(Backend::name)
+                .collect();
+            names.join(", ")
+        })
+        .collect();
+    format!(
+        "Lane backend: {} (`coherent info` says which run here; default: the widest \
+         hand-written one usable here, else the widest `wide`)",
+        list.join("; ")
+    )
+}
+
+/// `--accel`'s help: every accelerator of `AccelKind`.
+fn accel_help() -> String {
+    let names: Vec<&str> = AccelKind::ALL.iter().map(|k| k.name()).collect();
+    format!("Accelerator: {}", names.join(", "))
 }

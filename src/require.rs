@@ -1,5 +1,5 @@
 //! The `COHERENT_REQUIRE_*` switches: a test whose fetched data (meshes, goniodiagram files,
-//! HDR maps, scene assets) is missing skips with a message, unless its switch asks for the
+//! HDR maps, scene assets, an accelerator's native library) is missing skips with a message, unless its switch asks for the
 //! data, and then it fails. `scripts/test.sh` and CI set them.
 //!
 //! Also here: [`command`], which runs a test's built executable through an emulator when the

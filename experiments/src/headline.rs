@@ -264,9 +264,6 @@ fn family(backend: &str) -> &str {
     }
 }
 
-/// The order of the families in a cell; others follow in order of appearance.
-const FAMILIES: &[&str] = &["scalar", "sse", "avx2", "avx512", "wide", "pulp"];
-
 /// `speedup` per backend family as `label lo-hix`, joined by `; `: over the rows that pass
 /// `keep`, and, with `paper`, whose column `key` is one of the paper's keys (all kept rows
 /// when none is). The scalar rows are left out unless `with_scalar`.
@@ -310,12 +307,9 @@ fn by_family(
             None => families.push((f, vec![b.clone()], vec![s])),
         }
     }
-    let rank = |f: &str| {
-        FAMILIES
-            .iter()
-            .position(|x| *x == f)
-            .unwrap_or(FAMILIES.len())
-    };
+    // The dispatch module's order of families; others follow in order of appearance.
+    let order = Backend::families();
+    let rank = |f: &str| order.iter().position(|x| *x == f).unwrap_or(order.len());
     families.sort_by_key(|(f, _, _)| rank(f.as_str()));
     let cells: Vec<String> = families
         .iter()

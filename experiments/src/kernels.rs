@@ -314,12 +314,23 @@ const PORTABILITY_KERNELS: [&str; 8] = [
     BDF_KERNEL,
 ];
 
-/// Per width: the hand-written, the pulp (portable) and the `wide` backend.
-const FAMILIES: [(usize, Option<&str>, Option<&str>, &str); 3] = [
-    (4, Some("sse"), Some("pulp4"), "wide4"),
-    (8, Some("avx2"), Some("pulp8"), "wide8"),
-    (16, Some("avx512"), Some("pulp16"), "wide16"),
-];
+/// Per width (4, 8 and 16 lanes): the hand-written, the pulp (portable) and the `wide`
+/// backend, from the dispatch module's families.
+fn families() -> Vec<(
+    usize,
+    Option<&'static str>,
+    Option<&'static str>,
+    &'static str,
+)> {
+    let name = |family, lanes| Backend::in_family(family, lanes).map(Backend::name);
+    [4, 8, 16]
+        .into_iter()
+        .map(|lanes| {
+            let wide = name("wide", lanes).expect("wide has every width");
+            (lanes, name("hand", lanes), name("pulp", lanes), wide)
+        })
+        .collect()
+}
 
 /// The portability target: pulp's time at most this times the hand-written one's.
 const PORTABILITY_TARGET: f64 = 1.15;
@@ -352,7 +363,7 @@ fn portability_plots(ctx: &Ctx, t: &crate::Table) -> anyhow::Result<()> {
             };
             for (family, pick) in [("hand-written", 0), ("pulp", 1), ("wide", 2)] {
                 let mut v = Vec::new();
-                for &(_, hand, pulp, wide) in &FAMILIES {
+                for &(_, hand, pulp, wide) in &families() {
                     let b = [hand, pulp, Some(wide)][pick];
                     let s = match b {
                         Some(b) => seconds_of(table, kernel, b)?,
@@ -373,7 +384,10 @@ fn portability_plots(ctx: &Ctx, t: &crate::Table) -> anyhow::Result<()> {
                     "{kernel}: hand-written (sse/avx2/avx512) vs pulp vs wide, speedup over scalar"
                 ),
                 y_label: "speedup over scalar".into(),
-                categories: FAMILIES.iter().map(|f| format!("{} lanes", f.0)).collect(),
+                categories: families()
+                    .iter()
+                    .map(|f| format!("{} lanes", f.0))
+                    .collect(),
                 series,
             },
         )?;
@@ -434,7 +448,7 @@ fn portability_report(ctx: &Ctx, t: &crate::Table) -> anyhow::Result<String> {
         .collect();
     let mut rows = Vec::new();
     for kernel in PORTABILITY_KERNELS {
-        for &(lanes, hand, pulp, wide) in &FAMILIES {
+        for &(lanes, hand, pulp, wide) in &families() {
             for &(build, table) in &builds {
                 let Some(scalar) = seconds_of(table, kernel, "scalar")? else {
                     continue;

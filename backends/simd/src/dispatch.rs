@@ -210,6 +210,32 @@ impl Backend {
         })
     }
 
+    /// The families of [`Backend::ALL`] (as [`Backend::family`] names them), the hand-written
+    /// ones first, each in the order of `ALL`: the order reports list them in.
+    pub fn families() -> Vec<&'static str> {
+        let mut out: Vec<&'static str> = Backend::hand_written().map(Backend::family).collect();
+        for b in Backend::ALL {
+            if !out.contains(&b.family()) {
+                out.push(b.family());
+            }
+        }
+        out
+    }
+
+    /// The backend of [`Backend::ALL`] in `family` (as [`Backend::family`] names it; `"hand"`
+    /// for the hand-written ones of [`Backend::hand_written`]) with `lanes` lanes, if any.
+    pub fn in_family(family: &str, lanes: usize) -> Option<Backend> {
+        let hand = family == "hand";
+        Backend::ALL.into_iter().find(|&b| {
+            b.lanes() == lanes
+                && if hand {
+                    Backend::hand_written().any(|h| h == b)
+                } else {
+                    b.family() == family
+                }
+        })
+    }
+
     /// The backend named `name` (any of [`Backend::every`]), if there is one.
     pub fn named(name: &str) -> Option<Backend> {
         Backend::every().find(|b| b.name() == name)

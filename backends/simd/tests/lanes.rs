@@ -41,11 +41,6 @@ impl Kernel for Ops<'_> {
     fn run<L: Lanes>(self, l: L) -> Results {
         let inp = self.0;
         let mut out: Results = Vec::new();
-        let mut push =
-            |name: &'static str, v: Vec<u32>| match out.iter_mut().find(|(n, _)| *n == name) {
-                Some((_, all)) => all.extend(v),
-                None => out.push((name, v)),
-            };
         for p in (0..LEN).step_by(L::N) {
             let a = l.load(&inp.a[p..]);
             let b = l.load(&inp.b[p..]);
@@ -53,9 +48,8 @@ impl Kernel for Ops<'_> {
             let ia = l.load_i32(&inp.ia[p..]);
             let ib = l.load_i32(&inp.ib[p..]);
             let m = l.mask_from_bits(inp.mask_bits >> p);
-            let fb = |v: L::F32s| (0..L::N).map(|i| v.lane(i).to_bits()).collect::<Vec<_>>();
-            let ib_ = |v: L::I32s| (0..L::N).map(|i| v.lane(i) as u32).collect::<Vec<_>>();
-            let mb = |v: L::Mask| (0..L::N).map(|i| v.lane(i) as u32).collect::<Vec<_>>();
+            let mut push = |name, v| push_to(&mut out, name, v);
+            let (fb, ib_, mb) = (f_bits::<L>, i_bits::<L>, m_bits::<L>);
 
             push("add", fb(a + b));
             push("sub", fb(a - b));
@@ -117,76 +111,9 @@ impl Kernel for Ops<'_> {
             push("m_bitmask", vec![m.bitmask()]);
             push("m_splat", mb(l.splat_mask(inp.mask_bits & 1 == 1)));
 
-            // Gathers from a table indexed by the clamped integers.
-            let table: Vec<f32> = (0..37).map(|k| inp.c[k % LEN] + k as f32).collect();
-            let table_u: Vec<u32> = (0..37)
-                .map(|k| (inp.ia[k % LEN] as u32) ^ k as u32)
-                .collect();
-            let idx = ia.max(l.splat_i32(0)).min(l.splat_i32(36));
-            let idx = (idx & l.splat_i32(63)).min(l.splat_i32(36));
-            push("gather", fb(l.gather(&table, idx)));
-            push("gather_u32", ib_(l.gather_u32(&table_u, idx)));
-            let idx2 = idx.min(l.splat_i32(35));
-            let (lo, hi) = l.gather2(&table, idx2);
-            push("gather2_lo", fb(lo));
-            push("gather2_hi", fb(hi));
-            // gather2_near: indices close together, some near the table's end, which the
-            // avx512 backend reads through a window of 32 values of the table instead of lane
-            // by lane; a wider spread takes the hardware gather.
-            let near_table: Vec<f32> = (0..80).map(|k| inp.c[k % LEN] + k as f32).collect();
-            let spread = if inp.mask_bits & 1 == 1 { 7 } else { 31 };
-            let near = (l.splat_i32(inp.shift as i32 * 2) + (ib & l.splat_i32(spread)))
-                .min(l.splat_i32(78));
-            push("gather_near", fb(l.gather_near(&near_table, near)));
-            // the last value of the table too: a single lookup's window reaches it
-            let last = near.max(l.splat_i32(inp.shift as i32 % 2 + 78));
-            push("gather_near_last", fb(l.gather_near(&near_table, last)));
-            push("gather_near_far", fb(l.gather_near(&table, idx2)));
-            push(
-                "gather_near_short",
-                fb(l.gather_near(&table[..20], idx2.min(l.splat_i32(19)))),
-            );
-            let (lo, hi) = l.gather2_near(&near_table, near);
-            push("gather2_near_lo", fb(lo));
-            push("gather2_near_hi", fb(hi));
-            let (lo, hi) = l.gather2_near(&table, idx2);
-            push("gather2_near_far_lo", fb(lo));
-            push("gather2_near_far_hi", fb(hi));
-            // A table shorter than the window: read whole (masked loads), any spread.
-            let (lo, hi) = l.gather2_near(&table[..20], idx2.min(l.splat_i32(18)));
-            push("gather2_near_short_lo", fb(lo));
-            push("gather2_near_short_hi", fb(hi));
-
-            // One of eight values by three masks (a lane permute on avx2 and avx512).
-            let mut eight = [0.0f32; 8];
-            for (k, e) in eight.iter_mut().enumerate() {
-                *e = inp.c[k] + k as f32;
-            }
-            push("pick8", fb(l.pick8(&eight, m, m2, b.lt(c))));
-
-            // Stores, masked stores and round trips through slices.
-            let mut buf = inp.c;
-            a.store_masked(m, &mut buf[p..]);
-            push(
-                "store_masked",
-                buf[p..p + L::N].iter().map(|x| x.to_bits()).collect(),
-            );
-            let mut buf = [0.0f32; LEN];
-            a.store(&mut buf[p..]);
-            push(
-                "store",
-                buf[p..p + L::N].iter().map(|x| x.to_bits()).collect(),
-            );
-            let mut ibuf = [0i32; LEN];
-            ia.store(&mut ibuf[p..]);
-            push(
-                "store_i32",
-                ibuf[p..p + L::N].iter().map(|&x| x as u32).collect(),
-            );
-            push("from_fn", fb(l.from_fn(|i| inp.a[p + i] * 2.0)));
-            push("from_fn_i32", ib_(l.from_fn_i32(|i| inp.ia[p + i] ^ 5)));
-            push("mask_from_fn", mb(l.mask_from_fn(|i| inp.a[p + i] > 0.0)));
-
+            gathers(l, inp, ia, ib, m, m2, b, c, &mut out);
+            stores(l, inp, p, a, ia, m, &mut out);
+            let mut push = |name, v| push_to(&mut out, name, v);
             // Approximate operations and reductions are compared separately (see below).
             push("~rsqrt", fb(a.rsqrt()));
             push("~recip", fb(a.recip()));
@@ -197,6 +124,125 @@ impl Kernel for Ops<'_> {
         }
         out
     }
+}
+
+/// Adds `v` to the results of `name`.
+fn push_to(out: &mut Results, name: &'static str, v: Vec<u32>) {
+    match out.iter_mut().find(|(n, _)| *n == name) {
+        Some((_, all)) => all.extend(v),
+        None => out.push((name, v)),
+    }
+}
+
+fn f_bits<L: Lanes>(v: L::F32s) -> Vec<u32> {
+    (0..L::N).map(|i| v.lane(i).to_bits()).collect()
+}
+
+fn i_bits<L: Lanes>(v: L::I32s) -> Vec<u32> {
+    (0..L::N).map(|i| v.lane(i) as u32).collect()
+}
+
+fn m_bits<L: Lanes>(v: L::Mask) -> Vec<u32> {
+    (0..L::N).map(|i| v.lane(i) as u32).collect()
+}
+
+/// The gathers and `pick8`, on indices made from `ia` and `ib`.
+#[allow(clippy::too_many_arguments)]
+fn gathers<L: Lanes>(
+    l: L,
+    inp: &Inputs,
+    ia: L::I32s,
+    ib: L::I32s,
+    m: L::Mask,
+    m2: L::Mask,
+    b: L::F32s,
+    c: L::F32s,
+    out: &mut Results,
+) {
+    let mut push = |name, v| push_to(out, name, v);
+    let (fb, ib_) = (f_bits::<L>, i_bits::<L>);
+    // Gathers from a table indexed by the clamped integers.
+    let table: Vec<f32> = (0..37).map(|k| inp.c[k % LEN] + k as f32).collect();
+    let table_u: Vec<u32> = (0..37)
+        .map(|k| (inp.ia[k % LEN] as u32) ^ k as u32)
+        .collect();
+    let idx = ia.max(l.splat_i32(0)).min(l.splat_i32(36));
+    let idx = (idx & l.splat_i32(63)).min(l.splat_i32(36));
+    push("gather", fb(l.gather(&table, idx)));
+    push("gather_u32", ib_(l.gather_u32(&table_u, idx)));
+    let idx2 = idx.min(l.splat_i32(35));
+    let (lo, hi) = l.gather2(&table, idx2);
+    push("gather2_lo", fb(lo));
+    push("gather2_hi", fb(hi));
+    // gather2_near: indices close together, some near the table's end, which the
+    // avx512 backend reads through a window of 32 values of the table instead of lane
+    // by lane; a wider spread takes the hardware gather.
+    let near_table: Vec<f32> = (0..80).map(|k| inp.c[k % LEN] + k as f32).collect();
+    let spread = if inp.mask_bits & 1 == 1 { 7 } else { 31 };
+    let near =
+        (l.splat_i32(inp.shift as i32 * 2) + (ib & l.splat_i32(spread))).min(l.splat_i32(78));
+    push("gather_near", fb(l.gather_near(&near_table, near)));
+    // the last value of the table too: a single lookup's window reaches it
+    let last = near.max(l.splat_i32(inp.shift as i32 % 2 + 78));
+    push("gather_near_last", fb(l.gather_near(&near_table, last)));
+    push("gather_near_far", fb(l.gather_near(&table, idx2)));
+    push(
+        "gather_near_short",
+        fb(l.gather_near(&table[..20], idx2.min(l.splat_i32(19)))),
+    );
+    let (lo, hi) = l.gather2_near(&near_table, near);
+    push("gather2_near_lo", fb(lo));
+    push("gather2_near_hi", fb(hi));
+    let (lo, hi) = l.gather2_near(&table, idx2);
+    push("gather2_near_far_lo", fb(lo));
+    push("gather2_near_far_hi", fb(hi));
+    // A table shorter than the window: read whole (masked loads), any spread.
+    let (lo, hi) = l.gather2_near(&table[..20], idx2.min(l.splat_i32(18)));
+    push("gather2_near_short_lo", fb(lo));
+    push("gather2_near_short_hi", fb(hi));
+
+    // One of eight values by three masks (a lane permute on avx2 and avx512).
+    let mut eight = [0.0f32; 8];
+    for (k, e) in eight.iter_mut().enumerate() {
+        *e = inp.c[k] + k as f32;
+    }
+    push("pick8", fb(l.pick8(&eight, m, m2, b.lt(c))));
+}
+
+/// Stores, masked stores and round trips through slices, at packet `p`.
+fn stores<L: Lanes>(
+    l: L,
+    inp: &Inputs,
+    p: usize,
+    a: L::F32s,
+    ia: L::I32s,
+    m: L::Mask,
+    out: &mut Results,
+) {
+    let mut push = |name, v| push_to(out, name, v);
+    let (fb, ib_, mb) = (f_bits::<L>, i_bits::<L>, m_bits::<L>);
+    // Stores, masked stores and round trips through slices.
+    let mut buf = inp.c;
+    a.store_masked(m, &mut buf[p..]);
+    push(
+        "store_masked",
+        buf[p..p + L::N].iter().map(|x| x.to_bits()).collect(),
+    );
+    let mut buf = [0.0f32; LEN];
+    a.store(&mut buf[p..]);
+    push(
+        "store",
+        buf[p..p + L::N].iter().map(|x| x.to_bits()).collect(),
+    );
+    let mut ibuf = [0i32; LEN];
+    ia.store(&mut ibuf[p..]);
+    push(
+        "store_i32",
+        ibuf[p..p + L::N].iter().map(|&x| x as u32).collect(),
+    );
+    push("from_fn", fb(l.from_fn(|i| inp.a[p + i] * 2.0)));
+    push("from_fn_i32", ib_(l.from_fn_i32(|i| inp.ia[p + i] ^ 5)));
+    push("mask_from_fn", mb(l.mask_from_fn(|i| inp.a[p + i] > 0.0)));
 }
 
 fn same_bits(x: u32, y: u32) -> bool {
@@ -406,44 +452,31 @@ fn report_skips() {
     assert!(usable.contains(&Backend::Scalar));
 }
 
-macro_rules! backend_tests {
-    ($($module:ident => $backend:expr),* $(,)?) => {$(
-        mod $module {
-            use super::*;
-
-            proptest! {
-                #![proptest_config(ProptestConfig::with_cases(512))]
-                #[test]
-                fn every_operation_equals_scalar(inp in inputs()) {
-                    check($backend, &inp)?;
-                }
-            }
-
-            #[test]
-            fn availability_is_consistent() {
-                // The backends outside the sweeps are not stamped by the other tests.
-                let b = $backend;
-                let stamped = Backend::usable().contains(&b);
-                let factor = Backend::FACTORS.contains(&b);
-                assert_eq!(b.is_available(), stamped || (factor && b.compiled()));
-            }
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+    /// Every backend the crate has, from `Backend::every()`: a new backend is stamped here
+    /// without a line of its own.
+    #[test]
+    fn every_operation_equals_scalar(inp in inputs()) {
+        for b in Backend::every() {
+            check(b, &inp).map_err(|e| TestCaseError::fail(format!("backend {b}: {e}")))?;
         }
-    )*};
+    }
 }
 
-backend_tests!(
-    scalar => Backend::Scalar,
-    sse => Backend::Sse,
-    wide4 => Backend::Wide4,
-    wide8 => Backend::Wide8,
-    wide16 => Backend::Wide16,
-    avx2 => Backend::Avx2,
-    avx512 => Backend::Avx512,
-    pulp8 => Backend::Pulp8,
-    pulp16 => Backend::Pulp16,
-    pulp4 => Backend::Pulp4,
-    scalar_est => Backend::ScalarEst,
-);
+#[test]
+fn availability_is_consistent() {
+    // The backends outside the sweeps are not stamped by the other tests.
+    let usable = Backend::usable();
+    for b in Backend::every() {
+        let factor = Backend::FACTORS.contains(&b);
+        assert_eq!(
+            b.is_available(),
+            usable.contains(&b) || (factor && b.compiled()),
+            "{b}"
+        );
+    }
+}
 
 /// `pick8` by every combination of three masks, lanes mixed, on one backend: lane `i`
 /// takes entry `4 first + 2 second + third` of the table.
