@@ -180,6 +180,15 @@ pub fn cuboid(name: &str, min: Vec3, max: Vec3) -> Mesh {
     Mesh::new(name, positions, tris)
 }
 
+/// The point of a torus around the z axis, through the origin, at angle `a` around the axis
+/// and `b` around the tube: the one torus formula, which the renderer's built-in scenes mesh
+/// with UVs and turn to their +y axis.
+#[inline]
+pub fn torus_point(big_r: f32, small_r: f32, a: f32, b: f32) -> Vec3 {
+    let r = big_r + small_r * b.cos();
+    Vec3::new(r * a.cos(), r * a.sin(), small_r * b.sin())
+}
+
 /// A closed torus around the z axis: `2 * major * minor` triangles.
 pub fn torus(name: &str, center: Vec3, big_r: f32, small_r: f32, major: u32, minor: u32) -> Mesh {
     let (major, minor) = (major.max(3), minor.max(3));
@@ -188,8 +197,7 @@ pub fn torus(name: &str, center: Vec3, big_r: f32, small_r: f32, major: u32, min
         let a = TAU * i as f32 / major as f32;
         for j in 0..minor {
             let b = TAU * j as f32 / minor as f32;
-            let r = big_r + small_r * b.cos();
-            pos.push(center + Vec3::new(r * a.cos(), r * a.sin(), small_r * b.sin()));
+            pos.push(center + torus_point(big_r, small_r, a, b));
         }
     }
     let id = |i: u32, j: u32| (i % major) * minor + j % minor;

@@ -5,7 +5,7 @@
 use std::sync::Arc;
 
 use coherent_accel::Mesh;
-use coherent_accel::shapes::Rng;
+use coherent_accel::shapes::{Rng, torus_point};
 use glam::{Vec2, Vec3};
 
 use crate::scene::ShadedMesh;
@@ -111,8 +111,9 @@ pub fn torus(
 ) -> ShadedMesh {
     surface(name, major, minor, material, |u, v| {
         let (a, b) = (u * std::f32::consts::TAU, v * std::f32::consts::TAU);
-        let r = big_r + small_r * b.cos();
-        Vec3::new(r * a.cos(), small_r * b.sin(), -r * a.sin())
+        // z up to +y up: a rotation, exact in f32.
+        let p = torus_point(big_r, small_r, a, b);
+        Vec3::new(p.x, p.z, -p.y)
     })
 }
 
