@@ -230,6 +230,9 @@ fn write_readme(ctx: &Ctx, registry: &[Experiment], info: RunInfo) -> anyhow::Re
         eprintln!("reproduce: warning: README: {problem}");
     }
     eprintln!("reproduce: wrote {}", readme.display());
+    if let Some(root) = crate::root_readme::update(ctx, registry)? {
+        eprintln!("reproduce: wrote the headline of {}", root.display());
+    }
     Ok(())
 }
 

@@ -67,42 +67,7 @@ pub fn render(ctx: &Ctx, registry: &[Experiment]) -> String {
             m.emulated, m.arch
         ));
     }
-    let rows: Vec<Vec<String>> = [
-        ("table1", table1_row(ctx)),
-        ("table2", table2_row(ctx)),
-        ("table3", table3_row(ctx)),
-        ("table4", table4_row(ctx)),
-        ("table5", table5_row(ctx)),
-    ]
-    .into_iter()
-    .map(|(name, row)| {
-        let experiment = registry.iter().find(|e| e.name == name);
-        let title = experiment.map_or_else(
-            || name.to_owned(),
-            |e| {
-                let table = e.paper.split(" (").next().unwrap_or(e.paper);
-                format!("[{table}](#{})", crate::readme::anchor(e))
-            },
-        );
-        let (what, paper, ours, file) = row;
-        let ours = match ours {
-            Ok(Some(_)) if emulated.is_some() => "*emulated run: not compared*".to_owned(),
-            Ok(Some(text)) => text,
-            Ok(None) => format!("*not run into this folder yet (`reproduce --only {name}`)*"),
-            Err(e) => format!("**cannot read:** {e:#}"),
-        };
-        let file = if ctx.path(file).is_file() {
-            format!("[{file}]({file})")
-        } else {
-            file.to_owned()
-        };
-        vec![title, what.to_owned(), paper, ours, file]
-    })
-    .collect();
-    md.push_str(&markdown_table(
-        &["paper", "compared", "paper's figures", "ours", "CSV"],
-        &rows,
-    ));
+    md.push_str(&table(ctx, registry, emulated.is_some()));
     md.push('\n');
 
     let plots: Vec<String> = PLOTS
@@ -124,6 +89,47 @@ pub fn render(ctx: &Ctx, registry: &[Experiment]) -> String {
     }
     md.push_str(&machine_line(ctx));
     md
+}
+
+/// The paper's Tables 1-5 against ours, a line each, as a Markdown table (links relative to
+/// the results folder). `emulated`: the run's times are an emulator's, so none is compared.
+pub fn table(ctx: &Ctx, registry: &[Experiment], emulated: bool) -> String {
+    let rows: Vec<Vec<String>> = [
+        ("table1", table1_row(ctx)),
+        ("table2", table2_row(ctx)),
+        ("table3", table3_row(ctx)),
+        ("table4", table4_row(ctx)),
+        ("table5", table5_row(ctx)),
+    ]
+    .into_iter()
+    .map(|(name, row)| {
+        let experiment = registry.iter().find(|e| e.name == name);
+        let title = experiment.map_or_else(
+            || name.to_owned(),
+            |e| {
+                let table = e.paper.split(" (").next().unwrap_or(e.paper);
+                format!("[{table}](#{})", crate::readme::anchor(e))
+            },
+        );
+        let (what, paper, ours, file) = row;
+        let ours = match ours {
+            Ok(Some(_)) if emulated => "*emulated run: not compared*".to_owned(),
+            Ok(Some(text)) => text,
+            Ok(None) => format!("*not run into this folder yet (`reproduce --only {name}`)*"),
+            Err(e) => format!("**cannot read:** {e:#}"),
+        };
+        let file = if ctx.path(file).is_file() {
+            format!("[{file}]({file})")
+        } else {
+            file.to_owned()
+        };
+        vec![title, what.to_owned(), paper, ours, file]
+    })
+    .collect();
+    markdown_table(
+        &["paper", "compared", "paper's figures", "ours", "CSV"],
+        &rows,
+    )
 }
 
 /// One headline row: what is compared, the paper's figures, ours (`None`: no CSV), the CSV.

@@ -15,6 +15,7 @@ pub mod machine_keys;
 mod manycore;
 pub mod plot;
 pub mod readme;
+pub mod root_readme;
 pub mod table;
 pub mod targets;
 pub mod timing;
