@@ -79,46 +79,11 @@ impl<A: Accel> Renderer<'_, A> {
             }
         }
         // With beams, the camera packets' hits all at once, before anything else.
-        let mut camera_hits: Vec<Hits<L>> = Vec::new();
-        if self.packets == Packets::Beam && !packets.is_empty() {
-            let mut clock = StageClock::start(self.time_stages);
-            // A loop, not iterator adaptors: those stay out of line, outside the kernel.
-            let mut rays: Vec<Rays<L>> = Vec::with_capacity(packets.len());
-            let mut active: Vec<L::Mask> = Vec::with_capacity(packets.len());
-            for p in packets {
-                rays.push(self.camera.rays(l, l.load(&p.xs), l.load(&p.ys)).rays);
-                active.push(l.mask_from_bits(p.bits));
-            }
-            camera_hits = vec![Hits::miss(l); packets.len()];
-            if let Some(a) = aov {
-                let t0 = std::time::Instant::now();
-                let mut work = Work::default();
-                l.apart(
-                    #[inline(always)]
-                    |l| {
-                        self.accel.intersect_beam_work(
-                            l,
-                            &rays,
-                            &active,
-                            &mut camera_hits,
-                            &mut work,
-                        )
-                    },
-                );
-                charge_beam(a, &pixels, packets, n, work, t0.elapsed().as_nanos() as f64);
-                stats.work += work;
-            } else {
-                // Out of the kernel, as the renderer's other queries (`Lanes::apart`).
-                l.apart(
-                    #[inline(always)]
-                    |l| {
-                        self.accel
-                            .intersect_beam(l, &rays, &active, &mut camera_hits)
-                    },
-                );
-            }
-            clock.lap(stats, Stage::Traversal);
-        }
+        let camera_hits = if self.packets == Packets::Beam && !packets.is_empty() {
+            self.beam_hits(l, packets, &pixels, stats)
+        } else {
+            Vec::new()
+        };
         // The hits of the camera packet about to be traced, when the beam found them.
         let mut traced: Option<Hits<L>> = None;
         let mut radiance = Rgbs::zero(l);
@@ -199,6 +164,53 @@ impl<A: Accel> Renderer<'_, A> {
             out.push(colours);
         }
         out
+    }
+
+    /// The hits of every camera packet of `packets`, traced together as one beam; with
+    /// per-pixel maps on, what the beam did is charged to its samples' `pixels`.
+    #[inline(always)]
+    fn beam_hits<L: Lanes>(
+        &self,
+        l: L,
+        packets: &[PacketIn],
+        pixels: &[u32],
+        stats: &mut RenderStats,
+    ) -> Vec<Hits<L>> {
+        let n = L::N;
+        let aov = self.aov.as_deref();
+        let mut clock = StageClock::start(self.time_stages);
+        // A loop, not iterator adaptors: those stay out of line, outside the kernel.
+        let mut rays: Vec<Rays<L>> = Vec::with_capacity(packets.len());
+        let mut active: Vec<L::Mask> = Vec::with_capacity(packets.len());
+        for p in packets {
+            rays.push(self.camera.rays(l, l.load(&p.xs), l.load(&p.ys)).rays);
+            active.push(l.mask_from_bits(p.bits));
+        }
+        let mut camera_hits = vec![Hits::miss(l); packets.len()];
+        if let Some(a) = aov {
+            let t0 = std::time::Instant::now();
+            let mut work = Work::default();
+            l.apart(
+                #[inline(always)]
+                |l| {
+                    self.accel
+                        .intersect_beam_work(l, &rays, &active, &mut camera_hits, &mut work)
+                },
+            );
+            charge_beam(a, pixels, packets, n, work, t0.elapsed().as_nanos() as f64);
+            stats.work += work;
+        } else {
+            // Out of the kernel, as the renderer's other queries (`Lanes::apart`).
+            l.apart(
+                #[inline(always)]
+                |l| {
+                    self.accel
+                        .intersect_beam(l, &rays, &active, &mut camera_hits)
+                },
+            );
+        }
+        clock.lap(stats, Stage::Traversal);
+        camera_hits
     }
 }
 
