@@ -326,8 +326,9 @@ fn families() -> Vec<(
     [4, 8, 16]
         .into_iter()
         .map(|lanes| {
+            let hand = Backend::hand_written().find(|b| b.lanes() == lanes);
             let wide = name("wide", lanes).expect("wide has every width");
-            (lanes, name("hand", lanes), name("pulp", lanes), wide)
+            (lanes, hand.map(Backend::name), name("pulp", lanes), wide)
         })
         .collect()
 }

@@ -222,18 +222,12 @@ impl Backend {
         out
     }
 
-    /// The backend of [`Backend::ALL`] in `family` (as [`Backend::family`] names it; `"hand"`
-    /// for the hand-written ones of [`Backend::hand_written`]) with `lanes` lanes, if any.
+    /// The backend of [`Backend::ALL`] in `family` (as [`Backend::family`] names it) with
+    /// `lanes` lanes, if any.
     pub fn in_family(family: &str, lanes: usize) -> Option<Backend> {
-        let hand = family == "hand";
-        Backend::ALL.into_iter().find(|&b| {
-            b.lanes() == lanes
-                && if hand {
-                    Backend::hand_written().any(|h| h == b)
-                } else {
-                    b.family() == family
-                }
-        })
+        Backend::ALL
+            .into_iter()
+            .find(|&b| b.lanes() == lanes && b.family() == family)
     }
 
     /// The backend named `name` (any of [`Backend::every`]), if there is one.
