@@ -74,6 +74,58 @@ pub fn primary_rays(view: &View, width: u32, height: u32, tile: (u32, u32)) -> V
     rays
 }
 
+/// Primary rays of a `width x height` image for beams of `side x side` pixels whose packets
+/// are `packet` tiles (see [`tile_shape`]): beam after beam (rows of beams, top to bottom),
+/// and inside a beam packet after packet in Morton order, so that consecutive packets, and
+/// any run of them a beam traversal groups, are compact sub-tiles. Width and height must be
+/// multiples of `side`; a `side` that is not a multiple of the packet's sides takes the
+/// packets as rows of the beam's tile.
+pub fn beam_rays(view: &View, width: u32, height: u32, side: u32, packet: (u32, u32)) -> Vec<Ray1> {
+    assert!(
+        width.is_multiple_of(side) && height.is_multiple_of(side),
+        "image not a whole number of beams"
+    );
+    let (pw, ph) = packet;
+    let order: Vec<(u32, u32)> = if side.is_multiple_of(pw) && side.is_multiple_of(ph) {
+        let mut cells: Vec<(u32, u32)> = (0..side / ph)
+            .flat_map(|y| (0..side / pw).map(move |x| (x, y)))
+            .collect();
+        cells.sort_by_key(|&(x, y)| morton(x, y));
+        cells
+            .into_iter()
+            .flat_map(|(cx, cy)| {
+                (0..ph).flat_map(move |y| (0..pw).map(move |x| (cx * pw + x, cy * ph + y)))
+            })
+            .collect()
+    } else {
+        (0..side)
+            .flat_map(|y| (0..side).map(move |x| (x, y)))
+            .collect()
+    };
+    let mut rays = Vec::with_capacity((width * height) as usize);
+    for ty in (0..height).step_by(side as usize) {
+        for tx in (0..width).step_by(side as usize) {
+            for &(x, y) in &order {
+                rays.push(view.primary_ray(tx + x, ty + y, width, height));
+            }
+        }
+    }
+    rays
+}
+
+/// The Morton code of cell `(x, y)`: their bits interleaved, x in the even bits.
+fn morton(x: u32, y: u32) -> u64 {
+    let spread = |v: u32| {
+        let mut v = u64::from(v) & 0xffff_ffff;
+        v = (v | v << 16) & 0x0000_ffff_0000_ffff;
+        v = (v | v << 8) & 0x00ff_00ff_00ff_00ff;
+        v = (v | v << 4) & 0x0f0f_0f0f_0f0f_0f0f;
+        v = (v | v << 2) & 0x3333_3333_3333_3333;
+        (v | v << 1) & 0x5555_5555_5555_5555
+    };
+    spread(x) | spread(y) << 1
+}
+
 /// The world-space hit point and geometric normal (facing the ray) of `h` on `ray`.
 pub fn hit_frame(scene: &Scene, ray: &Ray1, h: &Hit1) -> (Vec3, Vec3) {
     let inst = &scene.instances[h.inst as usize];
@@ -352,6 +404,29 @@ mod tests {
     use super::*;
     use crate::BruteForce;
     use crate::scenes::{SceneSize, room};
+
+    /// Beam order: every pixel once, and each packet a compact tile (16 lanes: 4 x 4).
+    #[test]
+    fn beam_order_covers_the_image_with_square_packets() {
+        let s = room(SceneSize::Quick);
+        let (w, h) = (32, 16);
+        let rays = beam_rays(&s.view, w, h, 16, tile_shape(16));
+        let mut all = primary_rays(&s.view, w, h, (1, 1));
+        let key = |r: &Ray1| r.dir.to_array().map(f32::to_bits);
+        let mut got: Vec<_> = rays.iter().map(key).collect();
+        got.sort_unstable();
+        all.sort_by_key(key);
+        assert_eq!(got, all.iter().map(key).collect::<Vec<_>>());
+        // The first packet is the beam's top-left 4 x 4 pixels, the second the 4 x 4 right of
+        // it (Morton order), the third the one below the first.
+        let px = |x, y| key(&s.view.primary_ray(x, y, w, h));
+        assert_eq!(key(&rays[0]), px(0, 0));
+        assert_eq!(key(&rays[5]), px(1, 1));
+        assert_eq!(key(&rays[16]), px(4, 0));
+        assert_eq!(key(&rays[32]), px(0, 4));
+        assert_eq!(morton(3, 0), 0b101);
+        assert_eq!(morton(0, 3), 0b1010);
+    }
 
     /// Every packet width's workload holds the same rays, in its own tile order.
     #[test]

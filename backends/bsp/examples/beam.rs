@@ -1,7 +1,9 @@
 //! Beams against lane packets on a built-in scene: primary and shadow rays of a 1024 x 768
 //! image (or WxH), traced as lane packets of each backend and as square beams of 4x4 to 32x32
-//! rays on the same backend; Mrays/s (median of interleaved passes, thread CPU time) and the
-//! traversal counters per ray. The `accel` experiment of `reproduce` measures the same beside
+//! rays on the same backend (packets as the backend's packet tiles in Morton order inside the
+//! beam); Mrays/s (median of interleaved passes, thread CPU time) and the traversal counters
+//! per ray. The control is the beam of one packet (`beam 1p`: a 4x4 beam at 16 lanes, a 4x2
+//! at 8), which must time as the lane packets do. The `accel` experiment of `reproduce` measures the same beside
 //! Embree and obvhs; this is the quick look at the BSP alone.
 //!
 //! ```text
@@ -55,8 +57,7 @@ fn main() {
     }
 }
 
-fn rays(s: &BuiltinScene, bsp: &Bsp, kind: RayKind, w: u32, h: u32, tile: (u32, u32)) -> Vec<Ray1> {
-    let primary = workload::primary_rays(&s.view, w, h, tile);
+fn rays(s: &BuiltinScene, bsp: &Bsp, kind: RayKind, primary: Vec<Ray1>) -> Vec<Ray1> {
     match kind {
         RayKind::Shadow => workload::shadow_rays(bsp, &s.scene, &primary, s.light),
         _ => primary,
@@ -67,19 +68,25 @@ fn rays(s: &BuiltinScene, bsp: &Bsp, kind: RayKind, w: u32, h: u32, tile: (u32, 
 fn run(s: &BuiltinScene, bsp: &Bsp, kind: RayKind, b: Backend, w: u32, h: u32) {
     let occlusion = kind.occlusion();
     // (label, beam rays or 0 for lane packets, rays in that order)
+    let packet = workload::tile_shape(b.lanes());
+    let lane_tile = workload::tile_shape(b.lanes().max(16));
+    let primary = |tile| workload::primary_rays(&s.view, w, h, tile);
     let mut sets = vec![(
         "lanes".to_owned(),
         0,
-        rays(s, bsp, kind, w, h, workload::tile_shape(b.lanes().max(16))),
+        rays(s, bsp, kind, primary(lane_tile)),
     )];
+    // The control: beams of one packet, in the lane packets' own order.
+    sets.push((
+        "beam 1p".to_owned(),
+        b.lanes(),
+        rays(s, bsp, kind, primary(lane_tile)),
+    ));
     for side in [4u32, 8, 16, 32] {
-        if w.is_multiple_of(side) && h.is_multiple_of(side) {
-            let n = (side * side) as usize;
-            sets.push((
-                format!("beam {n}"),
-                n,
-                rays(s, bsp, kind, w, h, (side, side)),
-            ));
+        let n = (side * side) as usize;
+        if w.is_multiple_of(side) && h.is_multiple_of(side) && n > b.lanes() {
+            let beam = workload::beam_rays(&s.view, w, h, side, packet);
+            sets.push((format!("beam {n}"), n, rays(s, bsp, kind, beam)));
         }
     }
     let passes = 7;
@@ -121,7 +128,7 @@ fn run(s: &BuiltinScene, bsp: &Bsp, kind: RayKind, b: Backend, w: u32, h: u32) {
             .unwrap();
         let k = r.len() as f64;
         println!(
-            "{:>8} {:>7} {:>9}: {:7.2} Mrays/s ({:.2}x lanes)  per ray: {:.2} inner + {:.2} beam steps, {:.2} leaves, {:.3} tests x {:.2} lanes; fallback {} lanes",
+            "{:>8} {:>7} {:>9}: {:7.2} Mrays/s ({:.2}x lanes)  per ray: {:.3} inner + {:.3} group steps, {:.3} leaves, {:.3} tests x {:.2} lanes, {:.3} limit reductions, {:.3} instance entries, {:.3} packets moved; setup {:.1} ns/ray; ray by ray {} lanes, other signs {} lanes",
             kind.name(),
             b.name(),
             label,
@@ -132,7 +139,12 @@ fn run(s: &BuiltinScene, bsp: &Bsp, kind: RayKind, b: Backend, w: u32, h: u32) {
             c.leaves as f64 / k,
             c.tri_tests as f64 / k,
             c.lanes_per_test(),
+            c.limit_reductions as f64 / k,
+            c.instance_lanes as f64 / k,
+            c.packets_transformed as f64 / k,
+            c.beam_setup_ns as f64 / k,
             c.beam_fallback_lanes,
+            c.beam_mixed_lanes,
         );
     }
 }
@@ -153,6 +165,7 @@ struct Counted<'a> {
 
 impl Kernel for Counted<'_> {
     type Output = TraversalStats;
+    #[inline(always)]
     fn run<L: Lanes>(self, l: L) -> TraversalStats {
         let mut c = TraversalStats::default();
         let per = if self.beam == 0 {

@@ -1,254 +1,105 @@
 //! Beam traversal of the two-level BSP: many packets of coherent rays (a tile of camera
-//! rays, a tile's shadow rays toward one point) walk the trees as one group. Beyond the
-//! paper, after Reshetov, Soupikov & Hurley 2005 ("Multi-level ray tracing algorithm": an
-//! entry point shared by the group, found once, below which the group splits) with the
-//! interval bounds of Wald, Boulos & Shirley 2007 in place of a frustum.
+//! rays, a tile's shadow rays toward one point) walk the trees as groups. Beyond the paper,
+//! after Reshetov, Soupikov & Hurley 2005: the group decides each node once for all its
+//! packets and shares one stack ([`crate::group`]).
 //!
-//! A beam's rays share direction signs. Per axis it keeps the range of its rays' origins and
-//! inverse directions ([`Span`]); `(p - o) * inv` over those ranges bounds, from below and
-//! above, where every ray of the beam crosses a plane `p`, with the very arithmetic each ray
-//! would use (rounding is monotone, so the bounds hold for the rounded values too). With
-//! those bounds one test decides a node for every ray at once: a child no ray can enter before
-//! its current hit is skipped for all of them.
-//!
-//! - Object trees, multi-level: from the mesh root the beam descends while its rays enter one
-//!   child only (the entry point search). Where they may enter both, the beam halves (its
-//!   packets are ordered along the tile, so each half is a smaller tile) and each half
-//!   searches on from that node with its own, tighter bounds; a single packet, or a beam at a
-//!   leaf, continues as the ordinary packet walk from its entry point, its rays clipped to
-//!   the entry point's voxel.
-//! - The top tree: the whole beam walks it near to far with a stack, entering each instance
-//!   it reaches once; an instance's beam is moved into object space and regrouped by signs.
-//! - Each group of equal direction signs walks as a beam of its own (in world space, and
-//!   again per group in an instance's object space); lanes with a zero or subnormal direction
-//!   component go ray by ray. Both are counted ([`Counters::beam_fallback`]: lanes outside
-//!   the largest group, and the ray-by-ray ones).
+//! - A beam is cut into groups of [`group_size`] packets (16 at 16 lanes, 8 at 8, 4 at 4),
+//!   in the caller's packet order (for camera tiles: 4 x 4 sub-tiles in Morton order, so
+//!   each group is a compact part of the tile). A beam of one packet is that packet's lane
+//!   walk: a group of one has nothing to share (so is every beam of the scalar backend).
+//! - Each group of equal direction signs walks as a group of its own (in world space, and
+//!   again per group in an instance's object space); lanes with a zero or subnormal
+//!   direction component go ray by ray. Both are counted ([`Counters::beam_mixed`]: lanes
+//!   outside the largest sign group; [`Counters::beam_fallback`]: the ray-by-ray ones).
+//! - The top tree: the group walks it; at a leaf each instance is entered once per packet
+//!   (a mailbox of packet slots per instance), only by the packets whose bounds reach the
+//!   instance's world box, and only those packets are moved into object space and bounded
+//!   again there.
 //!
 //! The answers are those of the packet walk: every ray visits at least the leaves its own
 //! walk would, and hits only ever replace farther ones.
 
-use coherent_accel::{Aabb, Rays};
+use std::mem::MaybeUninit;
+use std::time::Instant;
+
+use coherent_accel::{Aabb, Rays, TriAccel};
 use coherent_simd::{Lanes, SimdF32, SimdMask};
 
 use crate::bsp::{Bsp, MeshTree};
 use crate::counters::Counters;
-use crate::mailbox::Mailbox1;
+use crate::group::{Bounds, GROUP, GroupLeaf, Slots, group_size, walk_group};
+use crate::mailbox::MailboxP;
 use crate::query::{LaneTask, Query1, QueryP};
-use crate::stack::Stack;
-use crate::walk::{RaysX, clip_box, mesh_packet};
-use crate::walk1::{Ray1x, widen_hi, widen_lo};
-use crate::{KdTree, Node};
+use crate::walk::{RaysX, clip_box};
+use crate::walk1::Ray1x;
 
-/// Interval bounds of a set of rays with equal direction signs: per axis the range of the
-/// origins and of the inverse directions (all finite), and the lowest `tmin`.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Span {
-    o_lo: [f32; 3],
-    o_hi: [f32; 3],
-    inv_lo: [f32; 3],
-    inv_hi: [f32; 3],
-    tmin: f32,
-}
-
-impl Span {
-    const EMPTY: Span = Span {
-        o_lo: [f32::INFINITY; 3],
-        o_hi: [f32::NEG_INFINITY; 3],
-        inv_lo: [f32::INFINITY; 3],
-        inv_hi: [f32::NEG_INFINITY; 3],
-        tmin: f32::INFINITY,
-    };
-
-    /// True when the span bounds no ray.
-    #[inline(always)]
-    fn is_empty(&self) -> bool {
-        self.o_lo[0]
-            .partial_cmp(&self.o_hi[0])
-            .is_none_or(|o| o.is_gt())
-    }
-
-    #[inline(always)]
-    fn union(&self, o: &Span) -> Span {
-        let mut s = *self;
-        for k in 0..3 {
-            s.o_lo[k] = s.o_lo[k].min(o.o_lo[k]);
-            s.o_hi[k] = s.o_hi[k].max(o.o_hi[k]);
-            s.inv_lo[k] = s.inv_lo[k].min(o.inv_lo[k]);
-            s.inv_hi[k] = s.inv_hi[k].max(o.inv_hi[k]);
-        }
-        s.tmin = s.tmin.min(o.tmin);
-        s
-    }
-
-    /// The bounds of lanes `m` of `r` (empty when `m` is).
-    #[inline(always)]
-    fn of_packet<L: Lanes>(l: L, r: &RaysX<L>, m: L::Mask) -> Span {
-        if m.none() {
-            return Span::EMPTY;
-        }
-        let (inf, ninf) = (l.splat(f32::INFINITY), l.splat(f32::NEG_INFINITY));
-        Span {
-            o_lo: [
-                lanes_min(m, r.o[0], inf),
-                lanes_min(m, r.o[1], inf),
-                lanes_min(m, r.o[2], inf),
-            ],
-            o_hi: [
-                lanes_max(m, r.o[0], ninf),
-                lanes_max(m, r.o[1], ninf),
-                lanes_max(m, r.o[2], ninf),
-            ],
-            inv_lo: [
-                lanes_min(m, r.inv[0], inf),
-                lanes_min(m, r.inv[1], inf),
-                lanes_min(m, r.inv[2], inf),
-            ],
-            inv_hi: [
-                lanes_max(m, r.inv[0], ninf),
-                lanes_max(m, r.inv[1], ninf),
-                lanes_max(m, r.inv[2], ninf),
-            ],
-            tmin: lanes_min(m, r.tmin, inf),
-        }
-    }
-
-    /// The lowest and highest `(p - o) * inv` along axis `k` over the set: where its rays
-    /// cross the plane at `p`. The product is bilinear, so its extremes lie at the corners.
-    #[inline(always)]
-    fn plane(&self, k: usize, p: f32) -> (f32, f32) {
-        let a = p - self.o_hi[k];
-        let b = p - self.o_lo[k];
-        let (i0, i1) = (self.inv_lo[k], self.inv_hi[k]);
-        let (w, x, y, z) = (a * i0, a * i1, b * i0, b * i1);
-        (w.min(x).min(y.min(z)), w.max(x).max(y.max(z)))
-    }
-
-    /// Per axis, the earliest entry into and the latest exit from box `b`'s slab over the
-    /// set (`neg`: the set's direction sign bits).
-    #[inline(always)]
-    fn slabs(&self, b: &Aabb, neg: u32) -> Slabs {
-        let mut s = Slabs {
-            enter: [0.0; 3],
-            exit: [0.0; 3],
-        };
-        for k in 0..3 {
-            let (p_in, p_out) = if neg >> k & 1 != 0 {
-                (b.max[k], b.min[k])
-            } else {
-                (b.min[k], b.max[k])
-            };
-            s.enter[k] = self.plane(k, p_in).0;
-            s.exit[k] = self.plane(k, p_out).1;
-        }
-        s
-    }
-}
-
-/// The lowest of lanes `m` of `x` (`inf`: `+inf` in every lane). A function, not a closure
-/// called seven times: it must inline into the backends' target-feature kernels.
-#[inline(always)]
-fn lanes_min<M: SimdMask>(m: M, x: M::F32s, inf: M::F32s) -> f32 {
-    m.select(x, inf).reduce_min()
-}
-
-/// The highest of lanes `m` of `x` (`ninf`: `-inf` in every lane).
-#[inline(always)]
-fn lanes_max<M: SimdMask>(m: M, x: M::F32s, ninf: M::F32s) -> f32 {
-    m.select(x, ninf).reduce_max()
-}
-
-/// Per axis, the bounds of a span's entries into and exits from a voxel's slabs.
-#[derive(Debug, Clone, Copy)]
-struct Slabs {
-    enter: [f32; 3],
-    exit: [f32; 3],
-}
-
-impl Slabs {
-    /// Whether some ray of the span may be inside the voxel in `[tmin, limit]` (widened by
-    /// the walks' slack, so a ray through a corner is inside).
-    #[inline(always)]
-    fn open(&self, tmin: f32, limit: f32) -> bool {
-        let t0 = self.enter[0]
-            .max(self.enter[1])
-            .max(self.enter[2])
-            .max(tmin);
-        let t1 = self.exit[0].min(self.exit[1]).min(self.exit[2]).min(limit);
-        widen_lo(t0) <= widen_hi(t1)
-    }
-}
-
-/// The child voxels of `vox` split on axis `k` at `p`: (left, right).
-#[inline(always)]
-fn halves(vox: &Aabb, k: usize, p: f32) -> (Aabb, Aabb) {
-    let (mut left, mut right) = (*vox, *vox);
-    left.max[k] = p;
-    right.min[k] = p;
-    (left, right)
-}
-
-/// The packets of a beam as one tree's walk sees them (world or object space), and the
-/// group of equal direction signs being walked.
-pub(crate) struct BeamX<L: Lanes> {
-    /// Prepared rays per packet, `signs` set to the group's.
-    rx: Vec<RaysX<L>>,
-    /// Per packet: the lanes with finite inverse directions, and per axis the lanes whose
+/// The packets of a group as one tree's walk sees them (world or object space), and the
+/// sign group being walked.
+struct Group<L: Lanes> {
+    /// Prepared rays per slot, written before a slot is used (never initialised as a whole:
+    /// the group is set up once per beam and per instance entered).
+    rx: [MaybeUninit<RaysX<L>>; GROUP],
+    /// Per slot, the lanes to trace.
+    base: [L::Mask; GROUP],
+    /// Per slot: the lanes with finite inverse directions, and per axis the lanes whose
     /// direction is negative along it.
-    bits: Vec<(u32, [u32; 3])>,
-    /// Per packet, the lanes of the group being walked.
-    m: Vec<L::Mask>,
-    /// Bounds over packet ranges, a complete binary tree over `width` (the packet count
-    /// rounded up to a power of two) leaves: entry 1 holds every packet, entry `h` has
-    /// children `2h` and `2h + 1`, and leaf `width + j` is packet `j` (empty past the last).
-    spans: Vec<Span>,
-    width: usize,
+    bits: [(u32, [u32; 3]); GROUP],
+    /// Per slot, the lanes of the sign group being walked.
+    m: [L::Mask; GROUP],
+    b: Bounds,
     /// How many lanes have each sign pattern (bit k: negative along axis k).
     counts: [u32; 8],
-    /// The group's direction sign bits (x, y, z, and z again in bit 3).
+    /// The sign group's direction sign bits.
     neg: u32,
 }
 
-impl<L: Lanes> BeamX<L> {
-    fn empty() -> Self {
+impl<L: Lanes> Group<L> {
+    #[inline(always)]
+    fn new(l: L) -> Self {
+        let none = l.splat_mask(false);
         Self {
-            rx: Vec::new(),
-            bits: Vec::new(),
-            m: Vec::new(),
-            spans: Vec::new(),
-            width: 1,
+            rx: [const { MaybeUninit::uninit() }; GROUP],
+            base: [none; GROUP],
+            bits: [(0, [0; 3]); GROUP],
+            m: [none; GROUP],
+            b: Bounds::EMPTY,
             counts: [0; 8],
             neg: 0,
         }
     }
 
-    /// The packets under span entry `h`.
+    /// Slot `j`'s rays (written by [`Group::set_rays`]).
     #[inline(always)]
-    fn range(&self, h: usize) -> (usize, usize) {
-        let level = h.ilog2();
-        let size = self.width >> level;
-        let a = (h - (1 << level)) * size;
-        (a.min(self.rx.len()), (a + size).min(self.rx.len()))
+    fn rx(&self, j: usize) -> &RaysX<L> {
+        // SAFETY: every slot a walk, a count or a selection reads was written first: the
+        // slots they take are among those the caller set (`set_rays`) for this group.
+        unsafe { self.rx[j].assume_init_ref() }
     }
 
-    /// Takes the prepared packets `rays`, each with the lanes to trace, and counts their sign
-    /// patterns. `odd` receives, per packet, the lanes no group can take (a zero or subnormal
-    /// direction component: an infinite inverse).
+    /// Sets slot `j`'s rays and the lanes to trace.
     #[inline(always)]
-    fn prepare(
-        &mut self,
-        l: L,
-        rays: impl Iterator<Item = (RaysX<L>, L::Mask)>,
-        odd: &mut Vec<L::Mask>,
-    ) {
-        self.rx.clear();
-        self.bits.clear();
-        odd.clear();
+    fn set_rays(&mut self, j: usize, r: RaysX<L>, lanes: L::Mask) {
+        self.rx[j] = MaybeUninit::new(r);
+        self.base[j] = lanes;
+    }
+
+    /// Counts the sign patterns of slots `slots` (their `rx` and `base` set). Returns, per
+    /// slot, the lanes no sign group can take (a zero or subnormal direction component: an
+    /// infinite inverse) in `odd`.
+    #[inline(always)]
+    fn prepare(&mut self, l: L, slots: u32, odd: &mut [L::Mask; GROUP]) {
         self.counts = [0; 8];
         let inf = l.splat(f32::INFINITY);
-        for (r, lanes) in rays {
+        let mut s = slots;
+        while s != 0 {
+            let j = s.trailing_zeros() as usize;
+            s &= s - 1;
+            let r = self.rx(j);
             // Finite inverse directions only: the bounds' products must not meet 0 * inf.
-            let finite =
-                lanes & r.inv[0].abs().lt(inf) & r.inv[1].abs().lt(inf) & r.inv[2].abs().lt(inf);
+            let finite = self.base[j]
+                & r.inv[0].abs().lt(inf)
+                & r.inv[1].abs().lt(inf)
+                & r.inv[2].abs().lt(inf);
             let fb = finite.bitmask();
             let nb = [r.neg[0].bitmask(), r.neg[1].bitmask(), r.neg[2].bitmask()];
             let mut rest = fb;
@@ -258,239 +109,279 @@ impl<L: Lanes> BeamX<L> {
                 let p = (nb[0] >> i & 1) | (nb[1] >> i & 1) << 1 | (nb[2] >> i & 1) << 2;
                 self.counts[p as usize] += 1;
             }
-            odd.push(lanes.and_not(finite));
-            self.bits.push((fb, nb));
-            self.rx.push(r);
+            odd[j] = self.base[j].and_not(finite);
+            self.bits[j] = (fb, nb);
         }
     }
 
-    /// Makes the lanes of sign pattern `g` the group walked: their masks, signs and bounds.
+    /// Makes the lanes of sign pattern `g` in slots `slots` the group walked: their masks
+    /// and bounds. Returns the slots with lanes in it.
     #[inline(always)]
-    fn select(&mut self, l: L, g: u32) {
+    fn select(&mut self, l: L, g: u32, slots: u32) -> u32 {
         let pick = |n: u32, bit: u32| if bit != 0 { n } else { !n };
-        self.neg = g | (g >> 2 & 1) << 3;
-        self.m.clear();
-        for (r, &(fb, nb)) in self.rx.iter_mut().zip(&self.bits) {
+        self.neg = g;
+        self.b = Bounds::EMPTY;
+        let mut with = 0;
+        let mut s = slots;
+        while s != 0 {
+            let j = s.trailing_zeros() as usize;
+            s &= s - 1;
+            let (fb, nb) = self.bits[j];
             let keep = fb & pick(nb[0], g & 1) & pick(nb[1], g >> 1 & 1) & pick(nb[2], g >> 2 & 1);
-            self.m.push(l.mask_from_bits(keep));
-            r.signs = self.neg;
-            r.mixed = 0;
+            if keep != 0 {
+                self.m[j] = l.mask_from_bits(keep);
+                // SAFETY: as in `Group::rx` (a field borrow, apart from `b`'s).
+                let r = unsafe { self.rx[j].assume_init_ref() };
+                self.b.set(l, j, r, self.m[j]);
+                with |= 1 << j;
+            }
         }
-        let n = self.rx.len();
-        self.width = n.max(1).next_power_of_two();
-        let w = self.width;
-        self.spans.clear();
-        self.spans.resize(2 * w, Span::EMPTY);
-        for j in 0..n {
-            self.spans[w + j] = Span::of_packet(l, &self.rx[j], self.m[j]);
+        with
+    }
+
+    /// The lanes of the sign group in slots `slots`.
+    #[inline(always)]
+    fn lanes(&self, slots: u32) -> u32 {
+        let mut n = 0;
+        let mut s = slots;
+        while s != 0 {
+            let j = s.trailing_zeros() as usize;
+            s &= s - 1;
+            n += self.m[j].count();
         }
-        for h in (1..w).rev() {
-            self.spans[h] = self.spans[2 * h].union(&self.spans[2 * h + 1]);
-        }
+        n
     }
 }
 
-/// The highest limit over the beam lanes of packets `a..b`.
+/// The sign pattern most lanes have.
 #[inline(always)]
-fn limit_of<L: Lanes, Q: QueryP<L>>(l: L, bx: &BeamX<L>, qs: &[Q], a: usize, b: usize) -> f32 {
-    let ninf = l.splat(f32::NEG_INFINITY);
-    let mut lim = f32::NEG_INFINITY;
-    for (m, q) in bx.m[a..b].iter().zip(&qs[a..b]) {
-        if m.any() {
-            lim = lim.max(m.select(q.limit(), ninf).reduce_max());
+fn largest(counts: &[u32; 8]) -> u32 {
+    let mut best = 0;
+    for g in 1..8 {
+        if counts[g] > counts[best] {
+            best = g;
         }
     }
-    lim
+    best as u32
 }
 
-/// What every walk of one mesh with a beam shares.
-struct MeshBeam<'a, L: Lanes> {
+/// The queries of a world group's packets and each one's highest limit over the group's
+/// lanes, taken again after each leaf where the packet found hits (never per node).
+struct Queries<'a, L: Lanes, Q> {
+    qs: &'a mut [Q],
+    /// Per slot, the world group's lanes (object-space groups may hold fewer: the limit is
+    /// always over all of them).
+    m: [L::Mask; GROUP],
+    lim: Slots,
+}
+
+impl<L: Lanes, Q: QueryP<L>> Queries<'_, L, Q> {
+    /// Takes slot `j`'s limit again.
+    #[inline(always)]
+    fn update<C: Counters>(&mut self, l: L, j: usize, c: &mut C) {
+        c.limit_reduction();
+        self.lim[j] = self.m[j]
+            .select(self.qs[j].limit(), l.splat(f32::NEG_INFINITY))
+            .reduce_max();
+    }
+}
+
+/// A mesh's leaves for a group: each packet that reaches a leaf tests its triangles.
+struct MeshLeaf<'a, 'q, L: Lanes, Q> {
     l: L,
-    mesh: &'a MeshTree,
+    tris: &'a [TriAccel],
+    g: &'a Group<L>,
+    q: &'a mut Queries<'q, L, Q>,
+    mb: [MailboxP; GROUP],
     inst: u32,
-    bx: &'a BeamX<L>,
-    thr: u32,
     mailbox: bool,
 }
 
-impl<L: Lanes> MeshBeam<'_, L> {
-    /// The whole beam from the mesh root: per sub-beam the entry point search, then halves
-    /// or packets. A work list rather than recursion, so that it all inlines into the
-    /// backend's kernel.
+impl<L: Lanes, Q: QueryP<L>, C: Counters> GroupLeaf<C> for MeshLeaf<'_, '_, L, Q> {
     #[inline(always)]
-    fn walk<Q: QueryP<L>, C: Counters>(&self, qs: &mut [Q], c: &mut C) {
-        let nodes = &self.mesh.tree.nodes[..];
-        let neg = self.bx.neg;
-        let mut work: Stack<(u32, u32, Aabb)> = Stack::new();
-        work.push((1, 0, self.mesh.tree.bounds));
-        'beams: while let Some((h, start, vox)) = work.pop() {
-            let (h, mut node, mut vox) = (h as usize, start as usize, vox);
-            let span = &self.bx.spans[h];
-            if span.is_empty() {
+    fn limits(&self) -> &Slots {
+        &self.q.lim
+    }
+
+    #[inline(always)]
+    fn leaf(&mut self, c: &mut C, items: &[u32], active: u32, vox: &Aabb) {
+        let l = self.l;
+        let mut s = active;
+        while s != 0 {
+            let j = s.trailing_zeros() as usize;
+            s &= s - 1;
+            let (m, r) = (self.g.m[j], self.g.rx(j));
+            let q = &mut self.q.qs[j];
+            // The packet's lanes that are inside the voxel before their limits: its bounds
+            // reached it, its rays may not.
+            let (t0, t1) = clip_box(l, vox, &r.o, &r.inv, r.tmin, q.limit());
+            let m = m & t0.le(t1);
+            if m.none() {
                 continue;
             }
-            let (a, b) = self.bx.range(h);
-            let limit = limit_of(self.l, self.bx, qs, a, b);
-            let mut s = span.slabs(&vox, neg);
-            if !s.open(span.tmin, limit) {
-                continue;
-            }
-            // The entry point: down while the rays may enter one child only.
-            loop {
-                let n = nodes[node];
-                if n.is_leaf() {
-                    break;
+            let bits = m.bitmask();
+            let mut found = false;
+            for &i in items {
+                let mut mm = m;
+                if self.mailbox {
+                    let new = self.mb[j].untested(i, bits);
+                    if new != bits {
+                        c.mailbox_skip((bits & !new).count_ones());
+                        if new == 0 {
+                            continue;
+                        }
+                        mm = m & l.mask_from_bits(new);
+                    }
                 }
-                c.beam_step();
-                let k = n.axis() & 3;
-                let (ts_lo, ts_hi) = span.plane(k, n.split());
-                let sb = (neg >> k & 1) as usize;
-                let empty = n.empty_children();
-                // Near child: the rays leave it through the split; far: they enter it there.
-                let (mut sn, mut sf) = (s, s);
-                sn.exit[k] = ts_hi;
-                sf.enter[k] = ts_lo;
-                let go_near = empty >> sb & 1 == 0 && sn.open(span.tmin, limit);
-                let go_far = empty >> (sb ^ 1) & 1 == 0 && sf.open(span.tmin, limit);
-                let (left, right) = halves(&vox, k, n.split());
-                let (near_vox, far_vox) = if sb == 0 {
-                    (left, right)
-                } else {
-                    (right, left)
-                };
-                match (go_near, go_far) {
-                    (true, false) => (node, vox, s) = (n.left() + sb, near_vox, sn),
-                    (false, true) => (node, vox, s) = (n.left() + 1 - sb, far_vox, sf),
-                    (false, false) => continue 'beams,
-                    (true, true) => break,
+                c.tri_test(mm.count());
+                let tri = &self.tris[i as usize];
+                let (hit, t, u, v) = tri.intersectx(l, &r.o, &r.d, r.tmin, q.limit(), mm);
+                if hit.any() {
+                    q.hits(l, hit, t, u, v, tri.prim, self.inst);
+                    found = true;
+                    if q.finished(m) {
+                        break;
+                    }
                 }
             }
-            if b - a > 1 && !nodes[node].is_leaf() {
-                // Both halves search on from here, the first half first.
-                work.push((2 * h as u32 + 1, node as u32, vox));
-                work.push((2 * h as u32, node as u32, vox));
-                continue;
-            }
-            c.beam_entry((b - a) as u32);
-            for (j, q) in qs.iter_mut().enumerate().take(b).skip(a) {
-                self.packet(j, node, &vox, q, c);
+            if found {
+                self.q.update(l, j, c);
             }
         }
     }
+}
 
-    /// Packet `j`'s beam lanes from node `node`, their segments clipped to its voxel.
+/// The top tree's leaves for a world group: each instance entered once per packet.
+struct TopLeaf<'a, 'q, L: Lanes, Q> {
+    l: L,
+    bsp: &'a Bsp,
+    rays: &'a [Rays<L>],
+    world: &'a Group<L>,
+    q: Queries<'q, L, Q>,
+    /// Per instance, the slots that entered it already.
+    seen: MailboxP,
+    /// Scratch: the group in an instance's object space.
+    obj: &'a mut Group<L>,
+}
+
+impl<L: Lanes, Q: QueryP<L>, C: Counters> GroupLeaf<C> for TopLeaf<'_, '_, L, Q> {
     #[inline(always)]
-    fn packet<Q: QueryP<L>, C: Counters>(
-        &self,
-        j: usize,
-        node: usize,
-        vox: &Aabb,
-        q: &mut Q,
-        c: &mut C,
-    ) {
-        let (l, r) = (self.l, &self.bx.rx[j]);
-        let m = self.bx.m[j];
-        if m.none() || q.finished(m) {
+    fn limits(&self) -> &Slots {
+        &self.q.lim
+    }
+
+    #[inline(always)]
+    fn leaf(&mut self, c: &mut C, items: &[u32], active: u32, _vox: &Aabb) {
+        for &i in items {
+            let new = self.seen.untested(i, active);
+            if new != 0 {
+                self.enter(c, i, new);
+            }
+        }
+    }
+}
+
+impl<L: Lanes, Q: QueryP<L>> TopLeaf<'_, '_, L, Q> {
+    /// Instance `i` for the world group's slots `slots`: the slots whose bounds reach its
+    /// world box, moved into object space when it has a transform and grouped by signs
+    /// there.
+    #[inline(always)]
+    fn enter<C: Counters>(&mut self, c: &mut C, i: u32, slots: u32) {
+        let (l, bsp) = (self.l, self.bsp);
+        let inst = &bsp.instances[i as usize];
+        let mesh = &bsp.meshes[inst.mesh as usize];
+        let w = self.world;
+        let box_slabs = w.b.slabs(l, &inst.world_bounds, w.neg);
+        let slots = slots & box_slabs.open(l, &w.b.tmin, &self.q.lim);
+        if slots == 0 {
             return;
         }
-        let (t0, t1) = clip_box(l, vox, &r.o, &r.inv, r.tmin, q.limit());
-        let m = m & t0.le(t1);
-        if m.any() {
-            mesh_packet(
-                l,
-                self.mesh,
-                self.inst,
-                r,
-                node,
-                t0,
-                t1,
-                m,
-                self.thr,
-                self.mailbox,
-                q,
-                c,
-            );
+        let o = &mut *self.obj;
+        if !inst.identity {
+            let mut s = slots;
+            while s != 0 {
+                let j = s.trailing_zeros() as usize;
+                s &= s - 1;
+                let r = self.rays[j].transformed(l, &inst.object_from_world);
+                o.set_rays(j, RaysX::new(l, &r.origin, &r.dir, r.tmin), w.m[j]);
+                c.packets_transformed(1);
+            }
+            let mut odd = [l.splat_mask(false); GROUP];
+            o.prepare(l, slots, &mut odd);
+            let mut s = slots;
+            while s != 0 {
+                let j = s.trailing_zeros() as usize;
+                s &= s - 1;
+                let mut bits = odd[j].bitmask();
+                while bits != 0 {
+                    let k = bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    c.beam_fallback(1);
+                    let mut task = ObjectTask {
+                        mesh,
+                        r: o.rx(j).lane(k),
+                        inst: i,
+                        mailbox: bsp.params.mailbox,
+                        c: &mut *c,
+                    };
+                    self.q.qs[j].with_lane(l, k, &mut task);
+                    self.q.update(l, j, c);
+                }
+            }
+        }
+        let big = largest(&o.counts);
+        // One walk per sign group (the world group's as it is for an untransformed
+        // instance): one call site, so the walk is compiled once.
+        for g in 0..8u32 {
+            let (grp, with): (&Group<L>, u32) = if inst.identity {
+                if g > 0 {
+                    break;
+                }
+                (w, slots)
+            } else {
+                if o.counts[g as usize] == 0 {
+                    continue;
+                }
+                if g != big {
+                    c.beam_mixed(o.counts[g as usize]);
+                }
+                let with = o.select(l, g, slots);
+                (&*o, with)
+            };
+            c.instance(grp.lanes(with));
+            walk_mesh(l, mesh, i, grp, with, &mut self.q, bsp.params.mailbox, c);
         }
     }
 }
 
-/// Walks `tree` near to far with the whole of span `span` (sign bits `neg`), calling
-/// `leaf(s, c, items)` at each non-empty leaf some ray may reach before `limit(s)`.
+/// Group `g`'s slots `slots` through instance `inst`'s mesh.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn walk_span<S: ?Sized, C: Counters>(
-    tree: &KdTree,
-    span: &Span,
-    neg: u32,
-    s: &mut S,
+fn walk_mesh<L: Lanes, Q: QueryP<L>, C: Counters>(
+    l: L,
+    mesh: &MeshTree,
+    inst: u32,
+    g: &Group<L>,
+    slots: u32,
+    q: &mut Queries<'_, L, Q>,
+    mailbox: bool,
     c: &mut C,
-    limit: impl Fn(&S) -> f32,
-    done: impl Fn(&S) -> bool,
-    mut leaf: impl FnMut(&mut S, &mut C, &[u32]),
 ) {
-    let nodes: &[Node] = &tree.nodes;
-    let mut stack: Stack<(u32, Slabs)> = Stack::new();
-    let mut node = 0;
-    let mut sl = span.slabs(&tree.bounds, neg);
-    if !sl.open(span.tmin, limit(s)) {
-        return;
-    }
-    loop {
-        let n = nodes[node];
-        if n.is_leaf() {
-            let items = &tree.items[n.items()];
-            if !items.is_empty() {
-                c.leaf();
-                leaf(s, c, items);
-                if done(s) {
-                    return;
-                }
-            }
-        } else {
-            c.beam_step();
-            let k = n.axis() & 3;
-            let (ts_lo, ts_hi) = span.plane(k, n.split());
-            let sb = (neg >> k & 1) as usize;
-            let empty = n.empty_children();
-            let lim = limit(s);
-            let (mut sn, mut sf) = (sl, sl);
-            sn.exit[k] = ts_hi;
-            sf.enter[k] = ts_lo;
-            let go_near = empty >> sb & 1 == 0 && sn.open(span.tmin, lim);
-            let go_far = empty >> (sb ^ 1) & 1 == 0 && sf.open(span.tmin, lim);
-            let (near, far) = (n.left() + sb, n.left() + 1 - sb);
-            match (go_near, go_far) {
-                (true, false) => {
-                    (node, sl) = (near, sn);
-                    continue;
-                }
-                (false, true) => {
-                    (node, sl) = (far, sf);
-                    continue;
-                }
-                (true, true) => {
-                    stack.push((far as u32, sf));
-                    (node, sl) = (near, sn);
-                    continue;
-                }
-                (false, false) => {}
-            }
-        }
-        loop {
-            let Some((next, e)) = stack.pop() else {
-                return;
-            };
-            if e.open(span.tmin, limit(s)) {
-                (node, sl) = (next as usize, e);
-                break;
-            }
-        }
-    }
+    let mut leaf = MeshLeaf {
+        l,
+        tris: &mesh.tris,
+        g,
+        q,
+        mb: [const { MailboxP::EMPTY }; GROUP],
+        inst,
+        mailbox,
+    };
+    walk_group(l, &mesh.tree, &g.b, g.neg, slots, &mut leaf, c);
 }
 
-/// A beam through the whole scene: packets `rays` under `active`, one query each. Each group
-/// of equal direction signs walks as a beam of its own; lanes with a zero direction component
-/// go ray by ray.
+/// A beam through the whole scene: packets `rays` under `active`, one query each, in groups
+/// of [`group_size`] packets (a group of one, and any packet of the scalar backend, is the
+/// packet walk).
 #[inline(always)]
 pub(crate) fn scene_beam<L: Lanes, Q: QueryP<L>, C: Counters>(
     l: L,
@@ -500,18 +391,46 @@ pub(crate) fn scene_beam<L: Lanes, Q: QueryP<L>, C: Counters>(
     qs: &mut [Q],
     c: &mut C,
 ) {
-    let mut world = BeamX::empty();
-    let mut odd = Vec::new();
-    world.prepare(
-        l,
-        rays.iter().zip(active).map(
-            #[inline(always)]
-            |(r, &a)| (RaysX::new(l, &r.origin, &r.dir, r.tmin), a & r.valid(l)),
-        ),
-        &mut odd,
-    );
-    for (j, &m) in odd.iter().enumerate() {
-        let mut bits = m.bitmask();
+    let n = rays.len();
+    let mut a = 0;
+    while a < n {
+        let b = (a + group_size::<L>()).min(n);
+        if L::N == 1 || b - a == 1 {
+            crate::walk::scene_packet(l, bsp, &rays[a], active[a], &mut qs[a], c);
+        } else {
+            group_beam(l, bsp, &rays[a..b], &active[a..b], &mut qs[a..b], c);
+        }
+        a = b;
+    }
+}
+
+/// One group of up to [`group_size`] packets through the whole scene.
+#[inline(always)]
+fn group_beam<L: Lanes, Q: QueryP<L>, C: Counters>(
+    l: L,
+    bsp: &Bsp,
+    rays: &[Rays<L>],
+    active: &[L::Mask],
+    qs: &mut [Q],
+    c: &mut C,
+) {
+    let t0 = C::TIMED.then(Instant::now);
+    let n = rays.len();
+    debug_assert!(n <= group_size::<L>());
+    let all = (1u32 << n) - 1;
+    let mut world = Group::new(l);
+    for j in 0..n {
+        let r = &rays[j];
+        let rx = RaysX::new(l, &r.origin, &r.dir, r.tmin);
+        world.set_rays(j, rx, active[j] & r.valid(l));
+    }
+    let mut odd = [l.splat_mask(false); GROUP];
+    world.prepare(l, all, &mut odd);
+    if let Some(t0) = t0 {
+        c.beam_setup(t0.elapsed().as_nanos() as u64);
+    }
+    for j in 0..n {
+        let mut bits = odd[j].bitmask();
         while bits != 0 {
             let i = bits.trailing_zeros() as usize;
             bits &= bits - 1;
@@ -520,136 +439,40 @@ pub(crate) fn scene_beam<L: Lanes, Q: QueryP<L>, C: Counters>(
             qs[j].with_lane(l, i, &mut SceneTask { bsp, r, c: &mut *c });
         }
     }
-    let mut obj = BeamX::empty();
-    let largest = (0..8).max_by_key(|&g| world.counts[g]).unwrap_or(0);
+    let big = largest(&world.counts);
+    let ninf = l.splat(f32::NEG_INFINITY);
+    let mut obj = Group::new(l);
     for g in 0..8u32 {
-        let n = world.counts[g as usize];
-        if n == 0 {
+        let count = world.counts[g as usize];
+        if count == 0 {
             continue;
         }
-        if g as usize != largest {
-            c.beam_fallback(n);
+        if g != big {
+            c.beam_mixed(count);
         }
-        world.select(l, g);
-        let mut seen = Mailbox1::new();
-        // A top tree of one leaf (few instances) too: its root box culls first.
-        walk_span(
-            &bsp.top,
-            &world.spans[1],
-            world.neg,
-            qs,
-            c,
-            #[inline(always)]
-            |qs| limit_of(l, &world, qs, 0, world.rx.len()),
-            #[inline(always)]
-            |qs| all_done(qs),
-            #[inline(always)]
-            |qs, c, items| {
-                for &i in items {
-                    if !seen.seen(i) {
-                        enter_beam(l, bsp, i, rays, &world, &mut obj, &mut odd, qs, c);
-                    }
-                }
+        let t0 = C::TIMED.then(Instant::now);
+        let with = world.select(l, g, all);
+        let mut lim = [f32::NEG_INFINITY; GROUP];
+        for j in 0..n {
+            lim[j] = world.m[j].select(qs[j].limit(), ninf).reduce_max();
+        }
+        if let Some(t0) = t0 {
+            c.beam_setup(t0.elapsed().as_nanos() as u64);
+        }
+        let mut top = TopLeaf {
+            l,
+            bsp,
+            rays,
+            world: &world,
+            q: Queries {
+                qs: &mut *qs,
+                m: world.m,
+                lim,
             },
-        );
-    }
-}
-
-/// Whether every packet's query is finished.
-#[inline(always)]
-fn all_done<L: Lanes, Q: QueryP<L>>(qs: &[Q]) -> bool {
-    // A loop, not `Iterator::all`: that stays out of line, outside the kernel's features.
-    for q in qs {
-        if !q.done() {
-            return false;
-        }
-    }
-    true
-}
-
-/// Instance `i` for the world group `world` (packets `rays`): in object space, per group of
-/// equal signs there (a transform may change them), when the instance has a transform. `obj`
-/// and `odd` are scratch space.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn enter_beam<L: Lanes, Q: QueryP<L>, C: Counters>(
-    l: L,
-    bsp: &Bsp,
-    i: u32,
-    rays: &[Rays<L>],
-    world: &BeamX<L>,
-    obj: &mut BeamX<L>,
-    odd: &mut Vec<L::Mask>,
-    qs: &mut [Q],
-    c: &mut C,
-) {
-    let inst = &bsp.instances[i as usize];
-    let mesh = &bsp.meshes[inst.mesh as usize];
-    let thr = bsp.params.threshold_for(L::N);
-    let mailbox = bsp.params.mailbox;
-    if !inst.identity {
-        let m = &inst.object_from_world;
-        obj.prepare(
-            l,
-            rays.iter().zip(&world.m).map(
-                #[inline(always)]
-                |(r, &bm)| {
-                    let o = r.transformed(l, m);
-                    (RaysX::new(l, &o.origin, &o.dir, r.tmin), bm)
-                },
-            ),
-            odd,
-        );
-        for (j, &m) in odd.iter().enumerate() {
-            let mut bits = m.bitmask();
-            while bits != 0 {
-                let k = bits.trailing_zeros() as usize;
-                bits &= bits - 1;
-                c.beam_fallback(1);
-                let r = obj.rx[j].lane(k);
-                qs[j].with_lane(
-                    l,
-                    k,
-                    &mut ObjectTask {
-                        mesh,
-                        r,
-                        inst: i,
-                        mailbox,
-                        c: &mut *c,
-                    },
-                );
-            }
-        }
-    }
-    // One walk per group (the world's group as it is for an untransformed instance): one
-    // call site, so the walk is compiled once.
-    for g in 0..8u32 {
-        let bx: &BeamX<L> = if inst.identity {
-            if g > 0 {
-                break;
-            }
-            world
-        } else {
-            if obj.counts[g as usize] == 0 {
-                continue;
-            }
-            obj.select(l, g);
-            obj
+            seen: MailboxP::EMPTY,
+            obj: &mut obj,
         };
-        let mut lanes = 0;
-        for m in &bx.m {
-            lanes += m.count();
-        }
-        c.instance(lanes);
-        MeshBeam {
-            l,
-            mesh,
-            inst: i,
-            bx,
-            thr,
-            mailbox,
-        }
-        .walk(qs, c);
+        walk_group(l, &bsp.top, &world.b, world.neg, with, &mut top, c);
     }
 }
 

@@ -12,6 +12,7 @@ use glam::{Affine3A, Vec3};
 use rayon::prelude::*;
 
 use crate::counters::{Counters, TraversalStats};
+use crate::group::{GROUP, group_size};
 use crate::leaf4::Leaves4;
 use crate::query::{All1, AllP, Any1, AnyP, First1, FirstP};
 use crate::{BspParams, KdTree, build_sah, build_top};
@@ -68,6 +69,8 @@ pub(crate) struct InstanceData {
     pub mesh: u32,
     /// The transform is the identity: rays need not be moved.
     pub identity: bool,
+    /// The mesh's box moved into the world (what the top tree was built over).
+    pub world_bounds: coherent_accel::Aabb,
 }
 
 /// The paper's two-level BSP. Build with [`Accel::build`]; query through [`Accel`].
@@ -173,17 +176,23 @@ impl Bsp {
         c: &mut C,
     ) {
         assert!(rays.len() == active.len() && rays.len() == hits.len());
+        // The queries of one group at a time, on the stack: no allocation inside a query.
         // Loops, not iterator adaptors: those stay out of line, outside the kernel's features.
-        let mut qs: Vec<FirstP<L>> = Vec::with_capacity(rays.len());
-        for r in rays {
-            qs.push(FirstP {
-                best: r.tmax,
+        let mut a = 0;
+        while a < rays.len() {
+            let b = (a + group_size::<L>()).min(rays.len());
+            let mut qs = [FirstP {
+                best: rays[a].tmax,
                 hits: Hits::miss(l),
-            });
-        }
-        crate::beam::scene_beam(l, self, rays, active, &mut qs, c);
-        for (h, q) in hits.iter_mut().zip(qs) {
-            *h = q.hits;
+            }; GROUP];
+            for j in a..b {
+                qs[j - a].best = rays[j].tmax;
+            }
+            crate::beam::scene_beam(l, self, &rays[a..b], &active[a..b], &mut qs[..b - a], c);
+            for j in a..b {
+                hits[j] = qs[j - a].hits;
+            }
+            a = b;
         }
     }
 
@@ -198,18 +207,29 @@ impl Bsp {
     ) {
         assert!(rays.len() == active.len() && rays.len() == occluded.len());
         let neg_inf = l.splat(f32::NEG_INFINITY);
-        let mut qs: Vec<AnyP<L>> = Vec::with_capacity(rays.len());
-        for (r, &a) in rays.iter().zip(active) {
-            qs.push(AnyP {
-                tmax: r.tmax,
-                occluded: l.splat_mask(false),
-                active: a & r.valid(l),
+        let none = l.splat_mask(false);
+        let mut a = 0;
+        while a < rays.len() {
+            let b = (a + group_size::<L>()).min(rays.len());
+            let mut qs = [AnyP {
+                tmax: neg_inf,
+                occluded: none,
+                active: none,
                 neg_inf,
-            });
-        }
-        crate::beam::scene_beam(l, self, rays, active, &mut qs, c);
-        for ((o, q), &a) in occluded.iter_mut().zip(qs).zip(active) {
-            *o = q.occluded & a;
+            }; GROUP];
+            for j in a..b {
+                qs[j - a] = AnyP {
+                    tmax: rays[j].tmax,
+                    occluded: none,
+                    active: active[j] & rays[j].valid(l),
+                    neg_inf,
+                };
+            }
+            crate::beam::scene_beam(l, self, &rays[a..b], &active[a..b], &mut qs[..b - a], c);
+            for j in a..b {
+                occluded[j] = qs[j - a].occluded & active[j];
+            }
+            a = b;
         }
     }
 
@@ -289,10 +309,12 @@ impl Bsp {
         self.instances = instances
             .iter()
             .zip(inverse)
-            .map(|(i, inv)| InstanceData {
+            .zip(&boxes)
+            .map(|((i, inv), b)| InstanceData {
                 object_from_world: inv,
                 mesh: i.mesh as u32,
                 identity: i.world_from_object == Affine3A::IDENTITY,
+                world_bounds: *b,
             })
             .collect();
         self.world_from_object = instances.iter().map(|i| i.world_from_object).collect();

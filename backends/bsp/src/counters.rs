@@ -3,6 +3,8 @@
 
 /// Where the traversal reports what it did. `()` counts nothing and costs nothing.
 pub trait Counters {
+    /// Whether the traversal should time its parts ([`Counters::beam_setup`]).
+    const TIMED: bool = false;
     #[inline(always)]
     fn inner(&mut self) {}
     #[inline(always)]
@@ -22,13 +24,27 @@ pub trait Counters {
     /// An inner node decided for a whole beam (or sub-beam) by its interval bounds.
     #[inline(always)]
     fn beam_step(&mut self) {}
-    /// A beam (or sub-beam) handed to its `packets` lane packets at its entry point.
+    /// A beam's group began walking a tree (the top tree or an instance's mesh) with
+    /// `packets` packets.
     #[inline(always)]
     fn beam_entry(&mut self, _packets: u32) {}
-    /// Lanes of a beam traced as ordinary packets instead (direction signs against the
-    /// beam's, a zero direction component).
+    /// Lanes of a beam traced ray by ray instead (a zero or subnormal direction component).
     #[inline(always)]
     fn beam_fallback(&mut self, _lanes: u32) {}
+    /// Lanes of a beam outside its largest group of equal direction signs: they walk as a
+    /// group of their own.
+    #[inline(always)]
+    fn beam_mixed(&mut self, _lanes: u32) {}
+    /// A packet's limit reduced over its lanes (a beam takes it after a leaf, not per node).
+    #[inline(always)]
+    fn limit_reduction(&mut self) {}
+    /// Packets moved into an instance's object space.
+    #[inline(always)]
+    fn packets_transformed(&mut self, _packets: u32) {}
+    /// Nanoseconds a beam spent preparing its groups (rays, sign groups, bounds); only
+    /// called when [`Counters::TIMED`].
+    #[inline(always)]
+    fn beam_setup(&mut self, _ns: u64) {}
 }
 
 impl Counters for () {}
@@ -49,11 +65,19 @@ pub struct TraversalStats {
     pub handoff_lanes: u64,
     /// Inner nodes decided for a whole beam or sub-beam.
     pub beam_steps: u64,
-    /// Sub-beams handed to their packets at an entry point, and the packets handed.
+    /// Tree walks begun by a beam's groups, and the packets they began with.
     pub beam_entries: u64,
     pub beam_entry_packets: u64,
-    /// Beam lanes traced as ordinary packets (signs against the beam's, zero components).
+    /// Beam lanes traced ray by ray (zero direction components).
     pub beam_fallback_lanes: u64,
+    /// Beam lanes outside their group's largest sign group.
+    pub beam_mixed_lanes: u64,
+    /// Packet limits reduced over their lanes.
+    pub limit_reductions: u64,
+    /// Packets moved into an instance's object space (by the packet walk or a beam).
+    pub packets_transformed: u64,
+    /// Time beams spent preparing their groups, nanoseconds.
+    pub beam_setup_ns: u64,
 }
 
 impl TraversalStats {
@@ -87,6 +111,7 @@ impl TraversalStats {
 }
 
 impl Counters for TraversalStats {
+    const TIMED: bool = true;
     #[inline(always)]
     fn inner(&mut self) {
         self.inner_nodes += 1;
@@ -127,5 +152,21 @@ impl Counters for TraversalStats {
     #[inline(always)]
     fn beam_fallback(&mut self, lanes: u32) {
         self.beam_fallback_lanes += lanes as u64;
+    }
+    #[inline(always)]
+    fn beam_mixed(&mut self, lanes: u32) {
+        self.beam_mixed_lanes += lanes as u64;
+    }
+    #[inline(always)]
+    fn limit_reduction(&mut self) {
+        self.limit_reductions += 1;
+    }
+    #[inline(always)]
+    fn packets_transformed(&mut self, packets: u32) {
+        self.packets_transformed += packets as u64;
+    }
+    #[inline(always)]
+    fn beam_setup(&mut self, ns: u64) {
+        self.beam_setup_ns += ns;
     }
 }

@@ -56,6 +56,7 @@ mod build_sah;
 mod build_top;
 mod clip;
 mod counters;
+mod group;
 mod leaf4;
 mod mailbox;
 mod node;

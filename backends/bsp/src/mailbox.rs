@@ -38,12 +38,14 @@ pub(crate) struct MailboxP {
 }
 
 impl MailboxP {
+    pub const EMPTY: MailboxP = MailboxP {
+        ids: [u32::MAX; MAILBOX_SLOTS],
+        lanes: [0; MAILBOX_SLOTS],
+    };
+
     #[inline(always)]
     pub fn new() -> Self {
-        Self {
-            ids: [u32::MAX; MAILBOX_SLOTS],
-            lanes: [0; MAILBOX_SLOTS],
-        }
+        Self::EMPTY
     }
 
     /// The lanes of `lanes` (a bitmask) for which `id` still has to be tested, and remembers

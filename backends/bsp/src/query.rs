@@ -100,6 +100,7 @@ impl<F: FnMut(Hit1)> Query1 for All1<'_, F> {
 }
 
 /// First hits of a packet.
+#[derive(Clone, Copy)]
 pub(crate) struct FirstP<L: Lanes> {
     pub best: L::F32s,
     pub hits: Hits<L>,
@@ -150,6 +151,7 @@ impl<L: Lanes> QueryP<L> for FirstP<L> {
 }
 
 /// Occlusion of a packet.
+#[derive(Clone, Copy)]
 pub(crate) struct AnyP<L: Lanes> {
     pub tmax: L::F32s,
     pub occluded: L::Mask,

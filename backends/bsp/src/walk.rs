@@ -108,13 +108,13 @@ pub(crate) fn clip_box<L: Lanes>(
 
 /// `x` moved down by [`SLACK`] relative, per lane.
 #[inline(always)]
-fn widen_lo<L: Lanes>(l: L, x: L::F32s) -> L::F32s {
+pub(crate) fn widen_lo<L: Lanes>(l: L, x: L::F32s) -> L::F32s {
     x - x.abs() * l.splat(SLACK)
 }
 
 /// `x` moved up by [`SLACK`] relative, per lane.
 #[inline(always)]
-fn widen_hi<L: Lanes>(l: L, x: L::F32s) -> L::F32s {
+pub(crate) fn widen_hi<L: Lanes>(l: L, x: L::F32s) -> L::F32s {
     x + x.abs() * l.splat(SLACK)
 }
 
@@ -418,6 +418,7 @@ pub(crate) fn enter_instance<L: Lanes, Q: QueryP<L>, C: Counters>(
         return;
     }
     let obj = world.transformed(l, &inst.object_from_world);
+    c.packets_transformed(1);
     let mut r = RaysX::new(l, &obj.origin, &obj.dir, wr.tmin);
     let (t0, t1) = clip_box(l, &mesh.tree.bounds, &r.o, &r.inv, wr.tmin, q.limit());
     let mm = m & t0.le(t1);

@@ -55,6 +55,27 @@ impl Kernel for Basics {
             assert_eq!(o[0].lane(0), bsp.occluded1(&r), "{r:?}");
         }
 
+        // A beam of one packet is the lane query, bit for bit.
+        for (k, kind) in [BeamKind::Camera, BeamKind::Shadow].into_iter().enumerate() {
+            let rays = beam_rays(11 + k as u64, &scene, 4, kind);
+            for c in rays.chunks(L::N) {
+                let p = [Rays::from_fn(l, |i| c[i % c.len()])];
+                let m = l.mask_from_fn(|i| i < c.len());
+                let mut h = [Hits::miss(l)];
+                let mut o = [l.splat_mask(false)];
+                bsp.intersect_beam(l, &p, &[m], &mut h);
+                bsp.occluded_beam(l, &p, &[m], &mut o);
+                let want = bsp.intersect(l, &p[0], m);
+                for i in 0..L::N {
+                    let bits = |h: Option<coherent_accel::Hit1>| {
+                        h.map(|h| (h.t.to_bits(), h.u.to_bits(), h.v.to_bits(), h.prim, h.inst))
+                    };
+                    assert_eq!(bits(h[0].lane(i)), bits(want.lane(i)));
+                }
+                assert_eq!(o[0].bitmask(), bsp.occluded(l, &p[0], m).bitmask());
+            }
+        }
+
         // A camera tile of 16 x 16: the same hits as its packets traced one by one.
         let rays = beam_rays(9, &scene, 16, BeamKind::Camera);
         let packets: Vec<Rays<L>> = rays
@@ -98,15 +119,98 @@ impl Kernel for Basics {
         let mut hits = vec![Hits::miss(l); packets.len()];
         let mut stats = TraversalStats::default();
         bsp.intersect_beam_counted(l, &packets, &valid, &mut hits, &mut stats);
-        // Lanes 1 (a zero component: ray by ray) and 2 (against the signs: its own group) at
-        // least; NaN and zero directions are invalid rays, misses, not counted.
-        assert!(stats.beam_fallback_lanes >= 2, "{stats:?}");
+        // Lane 1 (a zero component: ray by ray) and lane 2 (against the signs: a group of its
+        // own) when they are in a beam of more than one packet; NaN and zero directions are
+        // invalid rays, misses, not counted.
+        if packets.len() > 1 {
+            assert!(stats.beam_fallback_lanes >= 1, "{stats:?}");
+            assert!(stats.beam_mixed_lanes >= 1, "{stats:?}");
+        }
 
         // An empty beam and an empty scene.
         bsp.intersect_beam(l, &[], &[], &mut []);
         let empty = Bsp::build(&Scene::default(), &BspParams::default()).unwrap();
         let (bf, _) = build_both::<Bsp>(&Scene::default(), &BspParams::default());
         check_beam_queries(l, &bf, &empty, &rays, 2).unwrap();
+    }
+}
+
+/// The counters of a scene counted by hand: a unit quad (one leaf of two triangles) at
+/// z = 0, the same quad moved 10 along x, and a beam of two packets from above looking
+/// straight down at the first quad's centre.
+struct HandCounted;
+
+impl Kernel for HandCounted {
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) {
+        use coherent_accel::{Instance, Mesh};
+        use glam::Affine3A;
+        let quad = Mesh::new(
+            "quad",
+            vec![
+                Vec3::new(-1.0, -1.0, 0.0),
+                Vec3::new(1.0, -1.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::new(-1.0, 1.0, 0.0),
+            ],
+            vec![[0, 1, 2], [0, 2, 3]],
+        );
+        let scene = Scene {
+            meshes: vec![quad],
+            instances: vec![
+                Instance::new(0, Affine3A::IDENTITY),
+                Instance::new(0, Affine3A::from_translation(Vec3::new(10.0, 0.0, 0.0))),
+            ],
+        };
+        let bsp = Bsp::build(&scene, &BspParams::default()).unwrap();
+        assert!(bsp.mesh_trees()[0].tree.nodes[0].is_leaf(), "one leaf");
+        // Two packets of rays from (0, 0, 5) down through points of [-0.5, 0.5]^2: every
+        // direction has -z and, per lane, x and y of one sign pattern (+, +).
+        let ray = |j: usize, i: usize| {
+            let k = (j * L::N + i) as f32 / (2 * L::N) as f32;
+            let target = Vec3::new(0.1 + 0.4 * k, 0.1 + 0.3 * k, 0.0);
+            Ray1::infinite(Vec3::new(0.0, 0.0, 5.0), target - Vec3::new(0.0, 0.0, 5.0))
+        };
+        let packets = [0, 1].map(|j| Rays::from_fn(l, |i| ray(j, i)));
+        let all = [l.splat_mask(true); 2];
+        let mut hits = [Hits::miss(l); 2];
+        let mut c = TraversalStats::default();
+        bsp.intersect_beam_counted(l, &packets, &all, &mut hits, &mut c);
+        for h in &hits {
+            assert!(h.hit_mask(l).all(), "every ray hits the quad");
+        }
+        let lanes = 2 * L::N as u64;
+        // The moved quad's box is beyond every packet's bounds: entered by no packet, and no
+        // packet moved into its space. The first quad: both packets, every lane, one leaf
+        // where each packet finds hits and takes its limit once.
+        assert_eq!(c.packets_transformed, 0, "{c:?}");
+        assert_eq!(c.instances, 1, "{c:?}");
+        assert_eq!(c.instance_lanes, lanes, "{c:?}");
+        assert_eq!(c.limit_reductions, 2, "{c:?}");
+        assert_eq!(c.tri_tests, 4, "{c:?}");
+        assert_eq!(c.tri_test_lanes, 2 * lanes, "{c:?}");
+        assert_eq!(c.inner_nodes, 0, "{c:?}");
+        assert_eq!((c.beam_fallback_lanes, c.beam_mixed_lanes), (0, 0), "{c:?}");
+        // The mesh walk begins with both packets.
+        assert!(c.beam_entries >= 1 && c.beam_entry_packets >= 2, "{c:?}");
+
+        // The same beam with one lane turned to +z (away from the quads): a sign group of
+        // its own, one lane, counted; the others as before.
+        let mut up = packets;
+        up[1] = Rays::from_fn(l, |i| {
+            let r = ray(1, i);
+            if i == 0 {
+                Ray1::infinite(r.origin, Vec3::new(0.1, 0.1, 1.0))
+            } else {
+                r
+            }
+        });
+        let mut c = TraversalStats::default();
+        bsp.intersect_beam_counted(l, &up, &all, &mut hits, &mut c);
+        assert_eq!(c.beam_mixed_lanes, 1, "{c:?}");
+        assert_eq!(hits[1].lane(0), None);
+        assert_eq!(c.instance_lanes, lanes - 1, "{c:?}");
     }
 }
 
@@ -140,6 +244,11 @@ macro_rules! beam_tests {
                 on(B, Basics);
             }
 
+            #[test]
+            fn hand_counted() {
+                on(B, HandCounted);
+            }
+
             proptest! {
                 #![proptest_config(ProptestConfig { cases: cases(), ..ProptestConfig::default() })]
 
@@ -149,7 +258,7 @@ macro_rules! beam_tests {
                     tris in 1usize..400,
                     meshes in 1usize..4,
                     instances in 0usize..7,
-                    side in prop::sample::select(vec![1usize, 3, 8, 16]),
+                    side in prop::sample::select(vec![1usize, 3, 8, 16, 24]),
                 ) {
                     let k = RandomBeams { seed, tris, meshes, instances, side };
                     if let Some(r) = on(B, k) {

@@ -69,9 +69,17 @@ pub(super) fn rows(trav: &mut CsvOut, k: &KindRun, others: &[Other]) -> anyhow::
             &bvh_nodes,
             &"lanes",
             &b.map_or("single", Backend::name),
+            &"-",
+            &"-",
+            &format!("{:.3}", c.instance_lanes as f64 / n),
+            &format!("{:.3}", c.packets_transformed as f64 / n),
+            &"-",
+            &"-",
+            &"-",
         ])?;
     }
-    // The beams' counters: inner nodes count the beam's own steps with its packets'.
+    // The beams' counters: inner nodes count the groups' steps with the packets' (a beam of
+    // one packet takes the lane walk's), and the beams' own counters follow.
     for (rays, &(n_beam, backend)) in k.beam_sets.iter().zip(&k.setup.beams) {
         let c = backend.run(CountedBeam {
             bsp: k.bsp,
@@ -93,6 +101,13 @@ pub(super) fn rows(trav: &mut CsvOut, k: &KindRun, others: &[Other]) -> anyhow::
             &"-",
             &"beam",
             &backend.name(),
+            &format!("{:.3}", c.beam_steps as f64 / n),
+            &format!("{:.3}", c.limit_reductions as f64 / n),
+            &format!("{:.3}", c.instance_lanes as f64 / n),
+            &format!("{:.3}", c.packets_transformed as f64 / n),
+            &format!("{:.2}", c.beam_setup_ns as f64 / n),
+            &c.beam_fallback_lanes,
+            &c.beam_mixed_lanes,
         ])?;
     }
     Ok(())

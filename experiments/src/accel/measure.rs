@@ -9,7 +9,7 @@ use coherent_accel::scenes::{BuiltinScene, SceneSize};
 use coherent_accel::workload;
 use coherent_accel::workload::{Clock, PassResult, RayKind, TimeBeams, TimePackets};
 
-use super::rays::{beam_side, beams, rays, rays_in_tiles, widths};
+use super::rays::{beam_side, beams, from_primary, rays, widths};
 use super::{counters, embree, leaves};
 use crate::ctx::Ctx;
 use crate::table::CsvOut;
@@ -261,9 +261,10 @@ impl<'a> KindRun<'a> {
             setup
                 .beams
                 .iter()
-                .map(|&(n, _)| {
-                    let side = beam_side(n);
-                    rays_in_tiles(s, bsp, kind, w, h, (side, side))
+                .map(|&(n, b)| {
+                    let packet = workload::tile_shape(b.lanes());
+                    let primary = workload::beam_rays(&s.view, w, h, beam_side(n), packet);
+                    from_primary(s, bsp, kind, primary)
                 })
                 .collect()
         };

@@ -155,7 +155,17 @@ const TRAVERSAL_HEADER: &[&str] = &[
     "obvhs_nodes_per_ray",
     "query",
     "backend",
+    "group_steps_per_ray",
+    "limit_reductions_per_ray",
+    "instance_lanes_per_ray",
+    "packets_moved_per_ray",
+    "setup_ns_per_ray",
+    "ray_by_ray_lanes",
+    "other_sign_lanes",
 ];
+
+/// The trailing columns of [`TRAVERSAL_HEADER`] older files lack (the beams' own counters).
+const TRAVERSAL_BEAM_COLUMNS: usize = 7;
 
 fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     let setup = Setup::new(ctx);

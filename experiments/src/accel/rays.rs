@@ -60,7 +60,7 @@ pub(crate) fn rays(
 }
 
 /// The rays of one kind, ordered tile by tile (`tile`: width and height in pixels).
-pub(super) fn rays_in_tiles(
+fn rays_in_tiles(
     s: &BuiltinScene,
     bsp: &Bsp,
     kind: RayKind,
@@ -68,7 +68,16 @@ pub(super) fn rays_in_tiles(
     h: u32,
     tile: (u32, u32),
 ) -> Vec<Ray1> {
-    let primary = workload::primary_rays(&s.view, w, h, tile);
+    from_primary(s, bsp, kind, workload::primary_rays(&s.view, w, h, tile))
+}
+
+/// The rays of one kind from primary rays `primary`, in their order.
+pub(super) fn from_primary(
+    s: &BuiltinScene,
+    bsp: &Bsp,
+    kind: RayKind,
+    primary: Vec<Ray1>,
+) -> Vec<Ray1> {
     match kind {
         RayKind::Primary => primary,
         RayKind::Shadow => workload::shadow_rays(bsp, &s.scene, &primary, s.light),

@@ -562,10 +562,11 @@ pub(super) fn read_either(
     file: &str,
     header: &[&str],
 ) -> anyhow::Result<Option<crate::Table>> {
-    // Older files lack the trailing `query` and `backend` columns (and older still the
-    // cross-check's).
+    // Older files lack the beams' counters, and older still the trailing `query` and
+    // `backend` columns (and the cross-check's).
+    const B: usize = super::TRAVERSAL_BEAM_COLUMNS;
     let older: &[usize] = if file.ends_with("traversal.csv") {
-        &[2, 3, 4]
+        &[B, B + 2, B + 3, B + 4]
     } else {
         &[2, 4]
     };
