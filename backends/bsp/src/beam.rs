@@ -349,7 +349,11 @@ impl<L: Lanes, Q: QueryP<L>> TopLeaf<'_, '_, L, Q> {
                 (&*o, with)
             };
             c.instance(grp.lanes(with));
-            walk_mesh(l, mesh, i, grp, with, &mut self.q, bsp.params.mailbox, c);
+            let (q, mailbox) = (&mut self.q, bsp.params.mailbox);
+            l.apart(
+                #[inline(always)]
+                |l| walk_mesh(l, mesh, i, grp, with, q, mailbox, c),
+            );
         }
     }
 }
@@ -398,7 +402,13 @@ pub(crate) fn scene_beam<L: Lanes, Q: QueryP<L>, C: Counters>(
         if L::N == 1 || b - a == 1 {
             crate::walk::scene_packet(l, bsp, &rays[a], active[a], &mut qs[a], c);
         } else {
-            group_beam(l, bsp, &rays[a..b], &active[a..b], &mut qs[a..b], c);
+            // A function of its own: the group walks are large, and LLVM optimises a
+            // function in time superlinear in its size (the lane walk above stays inline).
+            let (rays, active, qs) = (&rays[a..b], &active[a..b], &mut qs[a..b]);
+            l.apart(
+                #[inline(always)]
+                |l| group_beam(l, bsp, rays, active, qs, c),
+            );
         }
         a = b;
     }
