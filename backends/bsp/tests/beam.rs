@@ -95,7 +95,10 @@ impl Kernel for Basics {
                 );
             }
         }
-        assert!(stats.beam_steps > 0 && stats.beam_entries > 0, "{stats:?}");
+        // The scalar backend's beams are its ray-by-ray walk (a group would be one ray).
+        if L::N > 1 {
+            assert!(stats.beam_steps > 0 && stats.beam_entries > 0, "{stats:?}");
+        }
 
         // Rays against the beam's signs, zero and NaN directions: answered as packets would,
         // and counted.
@@ -122,7 +125,7 @@ impl Kernel for Basics {
         // Lane 1 (a zero component: ray by ray) and lane 2 (against the signs: a group of its
         // own) when they are in a beam of more than one packet; NaN and zero directions are
         // invalid rays, misses, not counted.
-        if packets.len() > 1 {
+        if packets.len() > 1 && L::N > 1 {
             assert!(stats.beam_fallback_lanes >= 1, "{stats:?}");
             assert!(stats.beam_mixed_lanes >= 1, "{stats:?}");
         }
@@ -145,6 +148,10 @@ impl Kernel for HandCounted {
     #[inline(always)]
     fn run<L: Lanes>(self, l: L) {
         use coherent_accel::{Instance, Mesh};
+        if L::N == 1 {
+            // The scalar backend's beams are its ray-by-ray walk: no group to count.
+            return;
+        }
         use glam::Affine3A;
         let quad = Mesh::new(
             "quad",
