@@ -30,7 +30,7 @@ use crate::counters::Counters;
 use crate::group::{Bounds, GROUP, GroupLeaf, Slots, group_size, walk_group};
 use crate::mailbox::MailboxP;
 use crate::query::{LaneTask, Query1, QueryP};
-use crate::walk::{RaysX, clip_box};
+use crate::walk::{RaysX, clip_box, leaf_packet};
 use crate::walk1::Ray1x;
 
 /// The packets of a group as one tree's walk sees them (world or object space), and the
@@ -219,31 +219,8 @@ impl<L: Lanes, Q: QueryP<L>, C: Counters> GroupLeaf<C> for MeshLeaf<'_, '_, L, Q
             if m.none() {
                 continue;
             }
-            let bits = m.bitmask();
-            let mut found = false;
-            for &i in items {
-                let mut mm = m;
-                if self.mailbox {
-                    let new = self.mb[j].untested(i, bits);
-                    if new != bits {
-                        c.mailbox_skip((bits & !new).count_ones());
-                        if new == 0 {
-                            continue;
-                        }
-                        mm = m & l.mask_from_bits(new);
-                    }
-                }
-                c.tri_test(mm.count());
-                let tri = &self.tris[i as usize];
-                let (hit, t, u, v) = tri.intersectx(l, &r.o, &r.d, r.tmin, q.limit(), mm);
-                if hit.any() {
-                    q.hits(l, hit, t, u, v, tri.prim, self.inst);
-                    found = true;
-                    if q.finished(m) {
-                        break;
-                    }
-                }
-            }
+            let mb = self.mailbox.then_some(&mut self.mb[j]);
+            let found = leaf_packet(l, self.tris, items, r, m, self.inst, mb, q, c);
             if found {
                 self.q.update(l, j, c);
             }

@@ -7,7 +7,7 @@
 //! subtree's active lanes fall to a threshold, its lanes continue ray by ray.
 
 use coherent_accel::triangle::xyzz_s;
-use coherent_accel::{Aabb, Rays, Vec3s};
+use coherent_accel::{Aabb, Rays, TriAccel, Vec3s};
 use coherent_simd::{Lanes, SimdF32, SimdI32, SimdMask};
 use glam::Vec3;
 
@@ -346,29 +346,7 @@ pub(crate) fn mesh_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
         |q| q.done(),
         #[inline(always)]
         |q, c, items, m| {
-            let bits = m.bitmask();
-            for &i in items {
-                let mut mm = m;
-                if mailbox {
-                    let new = mb.untested(i, bits);
-                    if new != bits {
-                        c.mailbox_skip((bits & !new).count_ones());
-                        if new == 0 {
-                            continue;
-                        }
-                        mm = m & l.mask_from_bits(new);
-                    }
-                }
-                c.tri_test(mm.count());
-                let tri = &tris[i as usize];
-                let (hit, t, u, v) = tri.intersectx(l, &r.o, &r.d, r.tmin, q.limit(), mm);
-                if hit.any() {
-                    q.hits(l, hit, t, u, v, tri.prim, inst);
-                    if q.finished(m) {
-                        return;
-                    }
-                }
-            }
+            leaf_packet(l, tris, items, r, m, inst, mailbox.then_some(&mut mb), q, c);
         },
         #[inline(always)]
         |q, c, node, m, tn, tf| {
@@ -388,6 +366,50 @@ pub(crate) fn mesh_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
             }
         },
     );
+}
+
+/// Lanes `m` of packet `r` test a leaf's triangles `items` (of `tris`, instance `inst`),
+/// skipping those the packet's mailbox `mb` says were tested already; stops once the query
+/// has finished `m`. Returns whether any lane found a hit.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn leaf_packet<L: Lanes, Q: QueryP<L>, C: Counters>(
+    l: L,
+    tris: &[TriAccel],
+    items: &[u32],
+    r: &RaysX<L>,
+    m: L::Mask,
+    inst: u32,
+    mut mb: Option<&mut MailboxP>,
+    q: &mut Q,
+    c: &mut C,
+) -> bool {
+    let bits = m.bitmask();
+    let mut found = false;
+    for &i in items {
+        let mut mm = m;
+        if let Some(mb) = mb.as_deref_mut() {
+            let new = mb.untested(i, bits);
+            if new != bits {
+                c.mailbox_skip((bits & !new).count_ones());
+                if new == 0 {
+                    continue;
+                }
+                mm = m & l.mask_from_bits(new);
+            }
+        }
+        c.tri_test(mm.count());
+        let tri = &tris[i as usize];
+        let (hit, t, u, v) = tri.intersectx(l, &r.o, &r.d, r.tmin, q.limit(), mm);
+        if hit.any() {
+            q.hits(l, hit, t, u, v, tri.prim, inst);
+            found = true;
+            if q.finished(m) {
+                break;
+            }
+        }
+    }
+    found
 }
 
 /// Enters instance `i` with world-space lanes `m`: moves them into object space, clips them

@@ -148,10 +148,6 @@ impl Kernel for HandCounted {
     #[inline(always)]
     fn run<L: Lanes>(self, l: L) {
         use coherent_accel::{Instance, Mesh};
-        if L::N == 1 {
-            // The scalar backend's beams are its ray-by-ray walk: no group to count.
-            return;
-        }
         use glam::Affine3A;
         let quad = Mesh::new(
             "quad",
@@ -188,6 +184,16 @@ impl Kernel for HandCounted {
             assert!(h.hit_mask(l).all(), "every ray hits the quad");
         }
         let lanes = 2 * L::N as u64;
+        if L::N == 1 {
+            // The scalar backend's beams are its ray-by-ray walk: the same tests, no group.
+            assert_eq!(
+                (c.beam_steps, c.beam_entries, c.limit_reductions),
+                (0, 0, 0)
+            );
+            assert_eq!(c.instance_lanes, lanes, "{c:?}");
+            assert_eq!(c.tri_tests, 4, "{c:?}");
+            return;
+        }
         // The moved quad's box is beyond every packet's bounds: entered by no packet, and no
         // packet moved into its space. The first quad: both packets, every lane, one leaf
         // where each packet finds hits and takes its limit once.
