@@ -12,8 +12,8 @@
 //! decides near, far or both for every packet of the group at once: a few vector operations
 //! for up to 16 packets, where each packet walking alone pays one step per node. A packet
 //! whose rays cannot reach a child before their current hits drops out of that child; the
-//! stack holds (node, packets, their slabs), so nothing is walked twice and no packet starts
-//! from the root.
+//! stack holds (node, packets, their slabs, voxel), so nothing is walked twice and no packet
+//! starts from the root.
 //!
 //! Packets do their own work only at leaves (the leaf's items), and only the packets whose
 //! bounds reach the leaf before their limits. After a leaf, the packet's limit (its lanes'
@@ -72,7 +72,7 @@ impl Bounds {
         tmin: [f32::INFINITY; GROUP],
     };
 
-    /// Slot `j` from lanes `m` of `r` (none: the slot is unused). Returns the lanes.
+    /// Slot `j` from lanes `m` of `r` (none: the slot is unused).
     #[inline(always)]
     pub fn set<L: Lanes>(&mut self, l: L, j: usize, r: &RaysX<L>, m: L::Mask) {
         if m.none() {
