@@ -181,6 +181,13 @@ impl Bsp {
         let mut a = 0;
         while a < rays.len() {
             let b = (a + group_size::<L>()).min(rays.len());
+            if b - a == 1 {
+                // One packet (every packet of the scalar backend): the packet query itself,
+                // without a group's query slots to fill.
+                hits[a] = self.first(l, &rays[a], active[a], c);
+                a = b;
+                continue;
+            }
             let mut qs = [FirstP {
                 best: rays[a].tmax,
                 hits: Hits::miss(l),
@@ -211,6 +218,11 @@ impl Bsp {
         let mut a = 0;
         while a < rays.len() {
             let b = (a + group_size::<L>()).min(rays.len());
+            if b - a == 1 {
+                occluded[a] = self.any(l, &rays[a], active[a], c);
+                a = b;
+                continue;
+            }
             let mut qs = [AnyP {
                 tmax: neg_inf,
                 occluded: none,
