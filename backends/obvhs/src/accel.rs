@@ -1,8 +1,10 @@
 //! obvhs behind the traversal interface (paper section 3's queries). obvhs traverses single
 //! rays only: the packet forms are the interface's defaults, which serve a packet lane by
-//! lane (results label these rows accordingly).
+//! lane (results label these rows accordingly). The beam forms are this crate's large-packet
+//! walk over BVH2s ([`crate::packet`]).
 
-use coherent_accel::{Accel, AccelError, BuildStats, Hit1, Instance, Ray1, Scene};
+use coherent_accel::{Accel, AccelError, BuildStats, Hit1, Hits, Instance, Ray1, Rays, Scene};
+use coherent_simd::Lanes;
 
 use crate::scene::{Obvhs, ObvhsParams};
 
@@ -39,5 +41,27 @@ impl Accel for Obvhs {
 
     fn intersect_all1(&self, ray: &Ray1, f: &mut impl FnMut(Hit1)) {
         self.every_hit1(ray, f)
+    }
+
+    #[inline(always)]
+    fn intersect_beam<L: Lanes>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        hits: &mut [Hits<L>],
+    ) {
+        self.beam_first_hits(l, rays, active, hits)
+    }
+
+    #[inline(always)]
+    fn occluded_beam<L: Lanes>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        occluded: &mut [L::Mask],
+    ) {
+        self.beam_occluded(l, rays, active, occluded)
     }
 }

@@ -11,6 +11,7 @@ use obvhs::aabb::Aabb;
 use obvhs::ray::Ray;
 use obvhs::triangle::Triangle;
 
+use crate::packet::BeamTree;
 use crate::tree::{Count, Counts, Kind, Preset, Tree};
 
 /// How the scene is built.
@@ -35,36 +36,40 @@ impl Default for ObvhsParams {
     }
 }
 
-struct Mesh {
+pub(crate) struct Mesh {
     /// The non-degenerate triangles (the tree maps its leaves back to these indices).
-    tris: Vec<Triangle>,
+    pub(crate) tris: Vec<Triangle>,
     /// Each triangle's index in the input mesh.
-    prims: Vec<u32>,
-    tree: Tree,
+    pub(crate) prims: Vec<u32>,
+    pub(crate) tree: Tree,
+    /// The BVH2 the beams walk (`tree` itself when it is one; see [`crate::packet`]).
+    pub(crate) beam: BeamTree,
     bounds: Aabb,
 }
 
-struct Placed {
-    mesh: usize,
+pub(crate) struct Placed {
+    pub(crate) mesh: usize,
     world_from_object: Affine3A,
-    object_from_world: Affine3A,
+    pub(crate) object_from_world: Affine3A,
 }
 
 /// The obvhs accelerator: a built two-level obvhs scene.
 pub struct Obvhs {
-    meshes: Vec<Mesh>,
-    instances: Vec<Placed>,
-    top: Tree,
+    pub(crate) meshes: Vec<Mesh>,
+    pub(crate) instances: Vec<Placed>,
+    pub(crate) top: Tree,
+    /// The BVH2 the beams walk over the instances (`top` itself when it is one).
+    pub(crate) top_beam: BeamTree,
     /// The instance of each primitive of the top tree.
-    top_ids: Vec<u32>,
+    pub(crate) top_ids: Vec<u32>,
     /// The world box of every instance, grown a little (rays with `tmin < 0` are clipped to
     /// it: obvhs searches `t >= 0` only).
-    bounds: coherent_accel::Aabb,
+    pub(crate) bounds: coherent_accel::Aabb,
     params: ObvhsParams,
     stats: BuildStats,
     /// One instance with the identity transform: rays go straight into its mesh's tree, with
     /// no top level (the BSP and Embree skip it likewise).
-    direct: Option<usize>,
+    pub(crate) direct: Option<usize>,
 }
 
 /// The non-degenerate triangles of a (validated) mesh, as obvhs triangles, with their
@@ -111,7 +116,7 @@ impl<C: Count> Count for TopNodes<'_, C> {
 
 /// Distance to `tri` along `ray` within `[tmin, tmax]`, or infinity (obvhs' Möller-Trumbore).
 #[inline(always)]
-fn hit_t(tri: &Triangle, ray: &Ray) -> f32 {
+pub(crate) fn hit_t(tri: &Triangle, ray: &Ray) -> f32 {
     tri.intersect(ray)
 }
 
@@ -141,10 +146,12 @@ impl Obvhs {
                 stats.degenerate += mesh.indices.len() - tris.len();
                 let bounds = tris.iter().fold(Aabb::empty(), |b, t| b.union(&t.aabb()));
                 let tree = Tree::over_triangles(params.kind, &tris, params.mesh_preset);
+                let beam = BeamTree::over_triangles(&tree, &tris, params.mesh_preset);
                 Mesh {
                     tris,
                     prims,
                     tree,
+                    beam,
                     bounds,
                 }
             })
@@ -153,6 +160,7 @@ impl Obvhs {
             meshes,
             instances: Vec::new(),
             top: Tree::Empty,
+            top_beam: BeamTree::default(),
             top_ids: Vec::new(),
             bounds: coherent_accel::Aabb::EMPTY,
             params: *params,
@@ -197,6 +205,7 @@ impl Obvhs {
             coherent_accel::Aabb::new(world.min - margin, world.max + margin)
         };
         self.top = Tree::over_boxes(self.params.kind, &boxes, self.params.top_preset);
+        self.top_beam = BeamTree::over_boxes(&self.top, &boxes, self.params.top_preset);
         self.direct = match instances {
             [one] if one.world_from_object == Affine3A::IDENTITY => Some(one.mesh),
             _ => None,
@@ -213,7 +222,8 @@ impl Obvhs {
         Ok(())
     }
 
-    /// Bytes of the trees, the triangles they index and the instance data.
+    /// Bytes of the trees, the triangles they index and the instance data, with the BVH2s
+    /// kept for the beams when the trees are CWBVHs ([`Self::beam_memory`]).
     pub(crate) fn memory(&self) -> usize {
         let meshes: usize = self
             .meshes
@@ -221,13 +231,27 @@ impl Obvhs {
             .map(|m| m.tree.memory_bytes() + m.tris.len() * (size_of::<Triangle>() + 4))
             .sum();
         meshes
+            + self.beam_memory()
             + self.top.memory_bytes()
             + self.top_ids.len() * 4
             + self.instances.len() * size_of::<Placed>()
     }
 
+    /// Bytes of the BVH2s kept for the beams besides the trees (0 when the trees are BVH2s:
+    /// the beams walk them).
+    pub fn beam_memory(&self) -> usize {
+        self.meshes
+            .iter()
+            .map(|m| m.beam.memory_bytes())
+            .sum::<usize>()
+            + self.top_beam.memory_bytes()
+    }
+
     pub(crate) fn stats_now(&self) -> BuildStats {
-        self.stats.clone()
+        let mut s = self.stats.clone();
+        s.extra
+            .push(("beam_bvh2_bytes".into(), self.beam_memory() as f64));
+        s
     }
 
     pub fn params(&self) -> ObvhsParams {
@@ -236,7 +260,7 @@ impl Obvhs {
 
     /// `r` in instance `inst`'s space, with the segment `[tmin, tmax]`.
     #[inline(always)]
-    fn object_ray(&self, inst: &Placed, world: &Ray, tmax: f32) -> Ray {
+    pub(crate) fn object_ray(&self, inst: &Placed, world: &Ray, tmax: f32) -> Ray {
         // The interface's arithmetic (`Ray1::transformed`), so t agrees with the others.
         let m = &inst.object_from_world;
         let o = coherent_accel::transform_point1(m, world.origin.into());
