@@ -127,21 +127,47 @@ impl AccelVisitor for Pass<'_> {
     }
 }
 
-/// One pass of the BSP's beam traversal over `rays` in beams of `n` rays on `backend`.
-fn pass_beam(
-    bsp: &Bsp,
+/// One pass of `accel`'s beam queries over `rays` in beams of `n` rays on `backend` (the
+/// BSP's beam traversal, obvhs' large packets).
+fn pass_beam<A: Accel>(
+    accel: &A,
     rays: &[Ray1],
     occlusion: bool,
     (n, backend): (usize, Backend),
 ) -> anyhow::Result<PassResult> {
     Ok(backend.run(TimeBeams {
-        accel: bsp,
+        accel,
         rays,
         beam: n,
         occlusion,
         repeats: 1,
         clock: CLOCK,
     })?)
+}
+
+/// A timed beam pass on the concrete structure inside an [`AnyAccel`].
+struct PassBeam<'a> {
+    rays: &'a [Ray1],
+    occlusion: bool,
+    beam: (usize, Backend),
+}
+
+impl AccelVisitor for PassBeam<'_> {
+    type Output = anyhow::Result<PassResult>;
+    fn visit<A: Accel>(self, a: &A) -> Self::Output {
+        pass_beam(a, self.rays, self.occlusion, self.beam)
+    }
+}
+
+/// Whether `a` has beam queries of its own besides the BSP (obvhs' large packets over its
+/// BVH2s); the others' beams would time their packets one by one.
+fn has_own_beams(a: &AnyAccel) -> bool {
+    #[cfg(feature = "obvhs")]
+    if let AnyAccel::Obvhs(_) = a {
+        return true;
+    }
+    let _ = a;
+    false
 }
 
 /// Medians of interleaved samples of each configuration (`f(i)` runs configuration `i`
@@ -279,7 +305,8 @@ impl<'a> KindRun<'a> {
     }
 
     /// Every configuration: the BSP's widths, its beams, the others' widths (single rays
-    /// only for a structure without packets of its own).
+    /// only for a structure without packets of its own) and the beams of those with beams of
+    /// their own (obvhs), at the BSP's beam sizes.
     fn variants(&self, others: &[Other]) -> Vec<(Who, usize)> {
         let widths = &self.setup.widths;
         let mut v: Vec<(Who, usize)> = (0..widths.len()).map(|i| (Who::Bsp, i)).collect();
@@ -289,6 +316,9 @@ impl<'a> KindRun<'a> {
                 if wd == 1 || o.kind.has_packets() {
                     v.push((Who::Other(k), i));
                 }
+            }
+            if has_own_beams(&o.accel) {
+                v.extend((0..self.beam_sets.len()).map(|b| (Who::OtherBeam(k), b)));
             }
         }
         v
@@ -313,6 +343,11 @@ impl<'a> KindRun<'a> {
             match who {
                 Who::Bsp => pass_any(self.bsp, &self.sets[i], occlusion, widths[i].1),
                 Who::Beam => pass_beam(self.bsp, &self.beam_sets[i], occlusion, beams[i]),
+                Who::OtherBeam(k) => others[k].accel.visit(PassBeam {
+                    rays: &self.beam_sets[i],
+                    occlusion,
+                    beam: beams[i],
+                }),
                 Who::Other(k) | Who::EmbreePlain(k) | Who::EmbreeTrait(k) => {
                     match emb.pass(who, i, occlusion) {
                         Some(r) => Ok(r),
@@ -359,7 +394,7 @@ impl<'a> KindRun<'a> {
         for (v, &(who, i)) in variants.iter().enumerate() {
             let (name, build_ms, memory) = match who {
                 Who::Bsp | Who::Beam => ("bsp", build_ms, self.bsp.memory_bytes()),
-                Who::Other(k) => (
+                Who::Other(k) | Who::OtherBeam(k) => (
                     others[k].kind.name(),
                     others[k].build_ms,
                     others[k].accel.memory_bytes(),
@@ -367,7 +402,7 @@ impl<'a> KindRun<'a> {
                 Who::EmbreePlain(_) | Who::EmbreeTrait(_) => continue,
             };
             let (n, width, query, backend) = match who {
-                Who::Beam => (
+                Who::Beam | Who::OtherBeam(_) => (
                     self.beam_sets[i].len(),
                     beams[i].0,
                     "beam",
@@ -391,7 +426,9 @@ impl<'a> KindRun<'a> {
             ])?;
             if let Some(why) = disagreement(&reference, &r, n) {
                 let on = match who {
-                    Who::Beam => format!("beams of {width} on {}", beams[i].1.name()),
+                    Who::Beam | Who::OtherBeam(_) => {
+                        format!("beams of {width} on {}", beams[i].1.name())
+                    }
                     _ => format!("width {width}"),
                 };
                 disagreements.push(format!(
@@ -413,6 +450,8 @@ pub(super) enum Who {
     Beam,
     /// `others[k]`.
     Other(usize),
+    /// `others[k]`'s own beams (obvhs): `Setup::beams[i]`.
+    OtherBeam(usize),
     /// Embree (`others[k]`): the plain C-API loop over its packed packets.
     #[cfg_attr(not(feature = "embree"), allow(dead_code))]
     EmbreePlain(usize),

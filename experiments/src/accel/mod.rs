@@ -40,7 +40,10 @@
 //! square screen tiles of 4x4 to 32x32 rays on the widest backend (the beam-size sweep), and
 //! 8x8 and 16x16 on the scalar backend (one-lane packets under a shared beam: the culling
 //! without SIMD). The rays are the same as every other row's, ordered tile by tile; the
-//! beam rows are timed interleaved with the others and cross-checked like them.
+//! beam rows are timed interleaved with the others and cross-checked like them. obvhs has
+//! beam rows too (`accel` obvhs, the same sizes and rays): its large-packet traversal over
+//! the BVH2 each of its CWBVHs is built from (`coherent_obvhs::packet`; its `memory_bytes`
+//! include those BVH2s).
 
 mod counters;
 mod embree;

@@ -20,18 +20,24 @@ pub(super) fn is_beam(t: &crate::Table, r: usize) -> bool {
     t.get(r, "query").is_ok_and(|q| q == "beam")
 }
 
-/// The beam rows of `accel.csv` as a table: per scene and ray kind, the BSP's lane packets
-/// at the widest width, its beams per size and backend, and Embree's fastest row, Mrays/s.
+/// The beam rows of `accel.csv` as a table: per scene, ray kind and structure with beams
+/// (the BSP's beam traversal, obvhs' large packets over its BVH2s), its fastest lane row
+/// (packets for the BSP; obvhs has single rays only), its beams per size and backend, and
+/// Embree's fastest row, Mrays/s.
 fn beam_report(t: &crate::Table) -> anyhow::Result<Option<String>> {
     let mut sizes: Vec<(usize, String)> = Vec::new();
-    let mut keys: Vec<(String, String)> = Vec::new();
+    let mut keys: Vec<(String, String, String)> = Vec::new();
     for r in 0..t.rows.len() {
         if is_beam(t, r) {
             let k = (t.f64(r, "width")? as usize, t.get(r, "backend")?.to_owned());
             if !sizes.contains(&k) {
                 sizes.push(k);
             }
-            let key = (t.get(r, "scene")?.to_owned(), t.get(r, "rays")?.to_owned());
+            let key = (
+                t.get(r, "scene")?.to_owned(),
+                t.get(r, "rays")?.to_owned(),
+                t.get(r, "accel")?.to_owned(),
+            );
             if !keys.contains(&key) {
                 keys.push(key);
             }
@@ -44,14 +50,15 @@ fn beam_report(t: &crate::Table) -> anyhow::Result<Option<String>> {
     let mut header = vec![
         "scene".to_owned(),
         "rays".to_owned(),
-        "lane packets (widest)".to_owned(),
+        "accel".to_owned(),
+        "its fastest lanes".to_owned(),
         "Embree's fastest".to_owned(),
     ];
     header.extend(sizes.iter().map(|(n, b)| format!("beam {n} ({b})")));
-    header.push("best beam / packets".to_owned());
+    header.push("best beam / lanes".to_owned());
     header.push("best beam / Embree".to_owned());
     let mut rows = Vec::new();
-    for (scene, rays) in &keys {
+    for (scene, rays, accel) in &keys {
         let of = |pred: &dyn Fn(usize) -> anyhow::Result<bool>| -> anyhow::Result<Option<f64>> {
             let mut best: Option<f64> = None;
             for r in 0..t.rows.len() {
@@ -62,15 +69,18 @@ fn beam_report(t: &crate::Table) -> anyhow::Result<Option<String>> {
             }
             Ok(best)
         };
-        let lanes = of(&|r| Ok(t.get(r, "accel")? == "bsp" && !is_beam(t, r)))?;
+        let lanes = of(&|r| Ok(t.get(r, "accel")? == accel && !is_beam(t, r)))?;
         let embree = of(&|r| Ok(t.get(r, "accel")? == "embree"))?;
-        let mut row = vec![scene.clone(), rays.clone()];
+        let mut row = vec![scene.clone(), rays.clone(), accel.clone()];
         row.push(lanes.map_or("-".into(), fmt_num));
         row.push(embree.map_or("-".into(), fmt_num));
         let mut best_beam: Option<f64> = None;
         for (n, b) in &sizes {
             let v = of(&|r| {
-                Ok(is_beam(t, r) && t.f64(r, "width")? as usize == *n && t.get(r, "backend")? == b)
+                Ok(is_beam(t, r)
+                    && t.get(r, "accel")? == accel
+                    && t.f64(r, "width")? as usize == *n
+                    && t.get(r, "backend")? == b)
             })?;
             if b != "scalar" {
                 best_beam = match (best_beam, v) {
@@ -90,10 +100,12 @@ fn beam_report(t: &crate::Table) -> anyhow::Result<Option<String>> {
     }
     let header: Vec<&str> = header.iter().map(String::as_str).collect();
     Ok(Some(format!(
-        "\nBeams (`query` = beam in `accel.csv`): Mrays/s of the BSP's beam traversal on \
+        "\nBeams (`query` = beam in `accel.csv`): Mrays/s of the BSP's beam traversal and of \
+         obvhs' large packets (Wald et al. 2007, over the BVH2 each CWBVH is built from) on \
          square tiles of `width` rays (the beam-size sweep on the widest backend; the scalar \
-         backend's beams cull without SIMD), beside its fastest lane packets and Embree's \
-         fastest row (any width). The same rays, one thread.\n\n{}",
+         backend's beams cull without SIMD), beside the structure's own fastest lane row (BSP \
+         packets; obvhs, single rays) and Embree's fastest row (any width). The same rays, one \
+         thread.\n\n{}",
         markdown_table(&header, &rows)
     )))
 }
@@ -582,6 +594,29 @@ pub(super) fn read_either(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn beams_are_reported_per_structure() {
+        let csv = "scene,accel,rays,width,mrays_per_s,build_ms,memory_bytes,hits,t_sum,query,backend\n\
+                   room,bsp,primary,16,10.0,1,1,5,0,lanes,avx512\n\
+                   room,bsp,primary,64,20.0,1,1,5,0,beam,avx512\n\
+                   room,obvhs,primary,1,2.0,1,1,5,0,lanes,single\n\
+                   room,obvhs,primary,64,6.0,1,1,5,0,beam,avx512\n\
+                   room,embree,primary,16,30.0,1,1,5,0,lanes,avx512\n";
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("accel.csv");
+        std::fs::write(&path, csv).unwrap();
+        let t = crate::Table::read(&path, HEADER).unwrap();
+        let md = beam_report(&t).unwrap().unwrap();
+        assert!(
+            md.contains("| room | primary | bsp | 10.0 | 30.0 | 20.0 | 2.00 | 0.67 |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| room | primary | obvhs | 2.00 | 30.0 | 6.00 | 3.00 | 0.20 |"),
+            "{md}"
+        );
+    }
 
     #[test]
     fn a_run_on_another_machine_is_reported_with_that_machine() {
