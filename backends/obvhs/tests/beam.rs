@@ -30,6 +30,21 @@ fn pack<L: Lanes>(l: L, rays: &[Ray1]) -> (Vec<Rays<L>>, Vec<L::Mask>) {
         .unzip()
 }
 
+/// The masks `check_beam_queries` draws for `rays` from `mask_seed` (its code).
+fn check_masks<L: Lanes>(l: L, rays: &[Ray1], mask_seed: u64) -> Vec<L::Mask> {
+    let mut rng = coherent_accel::shapes::Rng::new(mask_seed);
+    rays.chunks(L::N)
+        .map(|c| {
+            let bits = if !rng.next_u64().is_multiple_of(4) {
+                u32::MAX
+            } else {
+                rng.next_u64() as u32
+            };
+            l.mask_from_fn(|i| i < c.len() && bits >> i & 1 == 1)
+        })
+        .collect()
+}
+
 fn bits(h: Option<Hit1>) -> Option<(u32, u32, u32, u32, u32)> {
     h.map(|h| (h.t.to_bits(), h.u.to_bits(), h.v.to_bits(), h.prim, h.inst))
 }
@@ -138,10 +153,17 @@ impl Kernel for RandomBeams {
                 beam_is_packets(l, &acc, &p, &m)
                     .map_err(|e| format!("{tree:?}: {kind:?} beam of {}: {e}", rays.len()))?;
                 if let Err(e) = check_beam_queries(l, &bf, &acc, &rays, self.seed) {
+                    // Tolerated only where the beam answers as the packets do under the
+                    // check's masks (ties aside): then the failure is obvhs' own triangle
+                    // test's (its precision on thin triangles, shared by the packets, or a
+                    // duplicate instance at the same `t` that brute force checks more
+                    // strictly when it names that one).
                     let same = check_beam_queries(l, &bf, &lanewise, &rays, self.seed);
-                    if same.as_ref().err() != Some(&e) {
+                    let masks = check_masks(l, &rays, self.seed);
+                    if let Err(d) = beam_is_packets(l, &acc, &p, &masks) {
                         return Err(format!(
-                            "{tree:?}: {kind:?} beam of {}: {e} (packets: {same:?})",
+                            "{tree:?}: {kind:?} beam of {}: {e}; against the packets: {d} \
+                             (their check: {same:?})",
                             rays.len()
                         ));
                     }
@@ -300,3 +322,11 @@ macro_rules! beam_tests {
 
 beam_tests!(scalar, Backend::Scalar);
 beam_tests!(widest, Backend::widest());
+
+/// The widest backend is a SIMD one on x86-64 (this crate's tests build every backend).
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn the_widest_backend_has_simd_lanes() {
+    eprintln!("widest backend: {}", Backend::widest().name());
+    assert_ne!(Backend::widest(), Backend::Scalar);
+}
