@@ -585,26 +585,32 @@ impl Obvhs {
                 h[0] = coherent_accel::Accel::intersect(self, l, &r[0], m[0]);
                 continue;
             }
-            self.chunk::<L, false>(l, r, m, |j, st, shift, fallback| {
-                let mut out = st.hit;
-                out.t = st.hit.t + shift;
-                if fallback.any() {
-                    let rays = r[j].unpack();
-                    let one = Hits::from_fn(
-                        l,
-                        #[inline(always)]
-                        |i| {
-                            if fallback.lane(i) {
-                                self.first_hit1(&rays[i])
-                            } else {
-                                None
-                            }
-                        },
-                    );
-                    out = Hits::select(fallback, &one, &out);
-                }
-                h[j] = out;
-            });
+            self.chunk::<L, false>(
+                l,
+                r,
+                m,
+                #[inline(always)]
+                |j, st, shift, fallback| {
+                    let mut out = st.hit;
+                    out.t = st.hit.t + shift;
+                    if fallback.any() {
+                        let rays = r[j].unpack();
+                        let one = Hits::from_fn(
+                            l,
+                            #[inline(always)]
+                            |i| {
+                                if fallback.lane(i) {
+                                    self.first_hit1(&rays[i])
+                                } else {
+                                    None
+                                }
+                            },
+                        );
+                        out = Hits::select(fallback, &one, &out);
+                    }
+                    h[j] = out;
+                },
+            );
         }
     }
 
@@ -633,18 +639,24 @@ impl Obvhs {
                 o[0] = coherent_accel::Accel::occluded(self, l, &r[0], m[0]);
                 continue;
             }
-            self.chunk::<L, true>(l, r, m, |j, st, _, fallback| {
-                let mut out = st.occluded;
-                if fallback.any() {
-                    let rays = r[j].unpack();
-                    let bits = fallback.bitmask();
-                    out |= l.mask_from_fn(
-                        #[inline(always)]
-                        |i| bits >> i & 1 != 0 && self.any_hit1(&rays[i]),
-                    );
-                }
-                o[j] = out;
-            });
+            self.chunk::<L, true>(
+                l,
+                r,
+                m,
+                #[inline(always)]
+                |j, st, _, fallback| {
+                    let mut out = st.occluded;
+                    if fallback.any() {
+                        let rays = r[j].unpack();
+                        let bits = fallback.bitmask();
+                        out |= l.mask_from_fn(
+                            #[inline(always)]
+                            |i| bits >> i & 1 != 0 && self.any_hit1(&rays[i]),
+                        );
+                    }
+                    o[j] = out;
+                },
+            );
         }
     }
 
