@@ -19,9 +19,10 @@
 //!
 //! **The beams walk BVH2s.** With [`crate::Kind::Bvh2`] those are the trees themselves; with
 //! [`crate::Kind::Cwbvh`] (the default) each tree's BVH2 is built besides its CWBVH and kept
-//! ([`BeamTree`]): its bytes are counted in `memory_bytes` (and reported alone as the build
-//! statistic `beam_bvh2_bytes`, [`crate::Obvhs::beam_memory`]), its build time in the build
-//! time.
+//! ([`BeamTree`]) when [`crate::ObvhsParams::beam_bvh2`] asks for it (else the beams trace
+//! packet after packet): its bytes are counted in `memory_bytes` (and reported alone as the
+//! build statistic `beam_bvh2_bytes`, [`crate::Obvhs::beam_memory`]), its build time in the
+//! build time.
 //!
 //! The answers are those of the single-ray path lane by lane: the same ray set-up
 //! ([`coherent_accel::Ray1::forward`], `-0.0` directions made `+0.0`), the same object-space

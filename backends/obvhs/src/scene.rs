@@ -22,6 +22,10 @@ pub struct ObvhsParams {
     pub mesh_preset: Preset,
     /// Preset of the top tree (rebuilt when instances move).
     pub top_preset: Preset,
+    /// CWBVHs also build the BVH2s the beams walk (`crate::packet`); without them the beams
+    /// of a CWBVH trace packet after packet. Off by default: a CWBVH built only for single
+    /// rays and packets should not pay a second build.
+    pub beam_bvh2: bool,
 }
 
 impl Default for ObvhsParams {
@@ -32,6 +36,7 @@ impl Default for ObvhsParams {
             kind: Kind::Cwbvh,
             mesh_preset: Preset::MediumBuild,
             top_preset: Preset::FastBuild,
+            beam_bvh2: false,
         }
     }
 }
@@ -146,7 +151,11 @@ impl Obvhs {
                 stats.degenerate += mesh.indices.len() - tris.len();
                 let bounds = tris.iter().fold(Aabb::empty(), |b, t| b.union(&t.aabb()));
                 let tree = Tree::over_triangles(params.kind, &tris, params.mesh_preset);
-                let beam = BeamTree::over_triangles(&tree, &tris, params.mesh_preset);
+                let beam = if params.beam_bvh2 {
+                    BeamTree::over_triangles(&tree, &tris, params.mesh_preset)
+                } else {
+                    BeamTree::default()
+                };
                 Mesh {
                     tris,
                     prims,
@@ -205,7 +214,11 @@ impl Obvhs {
             coherent_accel::Aabb::new(world.min - margin, world.max + margin)
         };
         self.top = Tree::over_boxes(self.params.kind, &boxes, self.params.top_preset);
-        self.top_beam = BeamTree::over_boxes(&self.top, &boxes, self.params.top_preset);
+        self.top_beam = if self.params.beam_bvh2 {
+            BeamTree::over_boxes(&self.top, &boxes, self.params.top_preset)
+        } else {
+            BeamTree::default()
+        };
         self.direct = match instances {
             [one] if one.world_from_object == Affine3A::IDENTITY => Some(one.mesh),
             _ => None,

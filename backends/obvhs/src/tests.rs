@@ -39,6 +39,7 @@ fn two_squares_scene() -> Scene {
 fn params(kind: Kind) -> ObvhsParams {
     ObvhsParams {
         kind,
+        beam_bvh2: true,
         ..Default::default()
     }
 }
@@ -90,6 +91,7 @@ fn every_preset_builds_and_answers() {
                 kind,
                 mesh_preset: preset,
                 top_preset: preset,
+                beam_bvh2: false,
             };
             let scene = Obvhs::build(&two_squares_scene(), &p).unwrap();
             assert_eq!(

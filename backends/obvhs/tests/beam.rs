@@ -13,6 +13,7 @@ use proptest::prelude::*;
 fn params(kind: Kind) -> ObvhsParams {
     ObvhsParams {
         kind,
+        beam_bvh2: true,
         ..Default::default()
     }
 }

@@ -215,7 +215,14 @@ fn build_others(ctx: &mut Ctx, s: &BuiltinScene, repeats: usize) -> Vec<Other> {
         if kind.unavailable_reason().is_some() {
             continue;
         }
-        match build_timed::<AnyAccel>(&s.scene, &AnyParams::timed(kind, 1), repeats) {
+        // obvhs' CWBVHs with the BVH2s its beams walk: its build time here includes them.
+        #[cfg_attr(not(feature = "obvhs"), allow(unused_mut))]
+        let mut params = AnyParams::timed(kind, 1);
+        #[cfg(feature = "obvhs")]
+        {
+            params.obvhs.beam_bvh2 = true;
+        }
+        match build_timed::<AnyAccel>(&s.scene, &params, repeats) {
             Ok((accel, build_ms)) => out.push(Other {
                 kind,
                 accel,

@@ -42,8 +42,8 @@
 //! without SIMD). The rays are the same as every other row's, ordered tile by tile; the
 //! beam rows are timed interleaved with the others and cross-checked like them. obvhs has
 //! beam rows too (`accel` obvhs, the same sizes and rays): its large-packet traversal over
-//! the BVH2 each of its CWBVHs is built from (`coherent_obvhs::packet`; its `memory_bytes`
-//! include those BVH2s).
+//! a BVH2 built beside each of its CWBVHs (`coherent_obvhs::packet`; here obvhs is built
+//! with them, so its `build_ms` and `memory_bytes` include them).
 
 mod counters;
 mod embree;
