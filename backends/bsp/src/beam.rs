@@ -25,9 +25,11 @@ use std::time::Instant;
 use coherent_accel::{Aabb, Rays, TriAccel};
 use coherent_simd::{Lanes, SimdF32, SimdMask};
 
+use crate::KdTree;
 use crate::bsp::{Bsp, MeshTree};
 use crate::counters::Counters;
-use crate::group::{Bounds, GROUP, GroupLeaf, Slots, group_size, walk_group};
+use crate::frustum::{Culler, Frustum, FrustumBuilder};
+use crate::group::{Bounds, GROUP, GroupLeaf, Slots, entry_point, group_size, walk_group};
 use crate::mailbox::MailboxP;
 use crate::query::{LaneTask, Query1, QueryP};
 use crate::walk::{RaysX, clip_box, leaf_packet};
@@ -51,6 +53,8 @@ struct Group<L: Lanes> {
     counts: [u32; 8],
     /// The sign group's direction sign bits.
     neg: u32,
+    /// The sign group's frustum, when leaves cull against it.
+    fr: Option<Frustum>,
 }
 
 impl<L: Lanes> Group<L> {
@@ -65,6 +69,7 @@ impl<L: Lanes> Group<L> {
             b: Bounds::EMPTY,
             counts: [0; 8],
             neg: 0,
+            fr: None,
         }
     }
 
@@ -114,13 +119,15 @@ impl<L: Lanes> Group<L> {
         }
     }
 
-    /// Makes the lanes of sign pattern `g` in slots `slots` the group walked: their masks
-    /// and bounds. Returns the slots with lanes in it.
+    /// Makes the lanes of sign pattern `g` in slots `slots` the group walked: their masks,
+    /// bounds and (`cull`) frustum. Returns the slots with lanes in it.
     #[inline(always)]
-    fn select(&mut self, l: L, g: u32, slots: u32) -> u32 {
+    fn select(&mut self, l: L, g: u32, slots: u32, cull: bool) -> u32 {
         let pick = |n: u32, bit: u32| if bit != 0 { n } else { !n };
         self.neg = g;
         self.b = Bounds::EMPTY;
+        self.fr = None;
+        let mut frb: Option<FrustumBuilder<L>> = None;
         let mut with = 0;
         let mut s = slots;
         while s != 0 {
@@ -133,8 +140,19 @@ impl<L: Lanes> Group<L> {
                 // SAFETY: as in `Group::rx` (a field borrow, apart from `b`'s).
                 let r = unsafe { self.rx[j].assume_init_ref() };
                 self.b.set(l, j, r, self.m[j]);
+                if cull {
+                    if frb.is_none() {
+                        frb = Some(FrustumBuilder::new(l, r, self.m[j]));
+                    }
+                    if let Some(f) = frb.as_mut() {
+                        f.add(l, r, self.m[j]);
+                    }
+                }
                 with |= 1 << j;
             }
+        }
+        if let Some(f) = frb {
+            self.fr = f.finish(g);
         }
         with
     }
@@ -186,10 +204,17 @@ impl<L: Lanes, Q: QueryP<L>> Queries<'_, L, Q> {
     }
 }
 
+/// The most items of a leaf culled against a group's frustum (leaves are small: more is
+/// rare and tested whole).
+const CULL_MAX: usize = 64;
+
 /// A mesh's leaves for a group: each packet that reaches a leaf tests its triangles.
 struct MeshLeaf<'a, 'q, L: Lanes, Q> {
     l: L,
     tris: &'a [TriAccel],
+    boxes: &'a [Aabb],
+    /// The group's frustum against the mesh's triangle boxes, when culling.
+    cull: Option<Culler>,
     g: &'a Group<L>,
     q: &'a mut Queries<'q, L, Q>,
     mb: [MailboxP; GROUP],
@@ -206,6 +231,27 @@ impl<L: Lanes, Q: QueryP<L>, C: Counters> GroupLeaf<C> for MeshLeaf<'_, '_, L, Q
     #[inline(always)]
     fn leaf(&mut self, c: &mut C, items: &[u32], active: u32, vox: &Aabb) {
         let l = self.l;
+        // The items no ray of the group can hit are skipped for every packet (a leaf of more
+        // than `CULL_MAX` items is tested whole).
+        let mut kept = [0u32; CULL_MAX];
+        let items = match &self.cull {
+            Some(f) if items.len() <= CULL_MAX => {
+                let mut n = 0;
+                for &i in items {
+                    if f.outside(&self.boxes[i as usize]) {
+                        c.tri_culled();
+                    } else {
+                        kept[n] = i;
+                        n += 1;
+                    }
+                }
+                if n == 0 {
+                    return;
+                }
+                &kept[..n]
+            }
+            _ => items,
+        };
         let mut s = active;
         while s != 0 {
             let j = s.trailing_zeros() as usize;
@@ -239,6 +285,8 @@ struct TopLeaf<'a, 'q, L: Lanes, Q> {
     seen: MailboxP,
     /// Scratch: the group in an instance's object space.
     obj: &'a mut Group<L>,
+    /// The entry points the beam's groups share (beams of more than one group).
+    ep: Option<&'a mut Entries>,
 }
 
 impl<L: Lanes, Q: QueryP<L>, C: Counters> GroupLeaf<C> for TopLeaf<'_, '_, L, Q> {
@@ -273,6 +321,19 @@ impl<L: Lanes, Q: QueryP<L>> TopLeaf<'_, '_, L, Q> {
         if slots == 0 {
             return;
         }
+        // Where the mesh walk starts: an untransformed instance's entry point for the beam's
+        // main signs, else the root.
+        let root = (0, mesh.tree.bounds);
+        let start = match self.ep.as_deref_mut() {
+            Some(e) if inst.identity && e.neg == w.neg => l.apart(
+                #[inline(always)]
+                |l| e.mesh(l, &mesh.tree, i, c),
+            ),
+            _ => Some(root),
+        };
+        let Some(start) = start else {
+            return;
+        };
         let o = &mut *self.obj;
         if !inst.identity {
             let mut s = slots;
@@ -322,14 +383,14 @@ impl<L: Lanes, Q: QueryP<L>> TopLeaf<'_, '_, L, Q> {
                 if g != big {
                     c.beam_mixed(o.counts[g as usize]);
                 }
-                let with = o.select(l, g, slots);
+                let with = o.select(l, g, slots, bsp.params.beam_cull);
                 (&*o, with)
             };
             c.instance(grp.lanes(with));
             let (q, mailbox) = (&mut self.q, bsp.params.mailbox);
             l.apart(
                 #[inline(always)]
-                |l| walk_mesh(l, mesh, i, grp, with, q, mailbox, c),
+                |l| walk_mesh(l, mesh, start, i, grp, with, q, mailbox, c),
             );
         }
     }
@@ -341,6 +402,7 @@ impl<L: Lanes, Q: QueryP<L>> TopLeaf<'_, '_, L, Q> {
 fn walk_mesh<L: Lanes, Q: QueryP<L>, C: Counters>(
     l: L,
     mesh: &MeshTree,
+    start: (u32, Aabb),
     inst: u32,
     g: &Group<L>,
     slots: u32,
@@ -351,13 +413,18 @@ fn walk_mesh<L: Lanes, Q: QueryP<L>, C: Counters>(
     let mut leaf = MeshLeaf {
         l,
         tris: &mesh.tris,
+        boxes: &mesh.boxes,
+        cull: match &g.fr {
+            Some(f) => Some(f.culler(&mesh.tree.bounds)),
+            None => None,
+        },
         g,
         q,
         mb: [const { MailboxP::EMPTY }; GROUP],
         inst,
         mailbox,
     };
-    walk_group(l, &mesh.tree, &g.b, g.neg, slots, &mut leaf, c);
+    walk_group(l, &mesh.tree, start, &g.b, g.neg, slots, &mut leaf, c);
 }
 
 /// A beam through the whole scene: packets `rays` under `active`, one query each, in groups
@@ -373,6 +440,17 @@ pub(crate) fn scene_beam<L: Lanes, Q: QueryP<L>, C: Counters>(
     c: &mut C,
 ) {
     let n = rays.len();
+    // Entry points the groups share, when there is more than one group.
+    // Out of line (`Lanes::apart`), as the group walks: this function is inlined into every
+    // caller's kernel.
+    let mut ep = if L::N > 1 && n > group_size::<L>() {
+        l.apart(
+            #[inline(always)]
+            |l| Entries::new(l, bsp, rays, active, c),
+        )
+    } else {
+        None
+    };
     let mut a = 0;
     while a < n {
         let b = (a + group_size::<L>()).min(n);
@@ -382,9 +460,10 @@ pub(crate) fn scene_beam<L: Lanes, Q: QueryP<L>, C: Counters>(
             // A function of its own: the group walks are large, and LLVM optimises a
             // function in time superlinear in its size (the lane walk above stays inline).
             let (rays, active, qs) = (&rays[a..b], &active[a..b], &mut qs[a..b]);
+            let ep = ep.as_mut();
             l.apart(
                 #[inline(always)]
-                |l| group_beam(l, bsp, rays, active, qs, c),
+                |l| group_beam(l, bsp, rays, active, qs, ep, c),
             );
         }
         a = b;
@@ -399,6 +478,7 @@ fn group_beam<L: Lanes, Q: QueryP<L>, C: Counters>(
     rays: &[Rays<L>],
     active: &[L::Mask],
     qs: &mut [Q],
+    mut ep: Option<&mut Entries>,
     c: &mut C,
 ) {
     let t0 = C::TIMED.then(Instant::now);
@@ -438,7 +518,15 @@ fn group_beam<L: Lanes, Q: QueryP<L>, C: Counters>(
             c.beam_mixed(count);
         }
         let t0 = C::TIMED.then(Instant::now);
-        let with = world.select(l, g, all);
+        // The beam's entry point into the top tree for its main signs.
+        let start = match ep.as_deref() {
+            Some(e) if e.neg == g => e.top,
+            _ => Some((0, bsp.top.bounds)),
+        };
+        let Some(start) = start else {
+            continue;
+        };
+        let with = world.select(l, g, all, bsp.params.beam_cull);
         let mut lim = [f32::NEG_INFINITY; GROUP];
         for j in 0..n {
             lim[j] = world.m[j].select(qs[j].limit(), ninf).reduce_max();
@@ -458,8 +546,121 @@ fn group_beam<L: Lanes, Q: QueryP<L>, C: Counters>(
             },
             seen: MailboxP::EMPTY,
             obj: &mut obj,
+            ep: ep.as_deref_mut(),
         };
-        walk_group(l, &bsp.top, &world.b, world.neg, with, &mut top, c);
+        walk_group(l, &bsp.top, start, &world.b, world.neg, with, &mut top, c);
+    }
+}
+
+/// Entry points into the trees shared by the groups of a beam of more than one group (each
+/// group's walk from the root would repeat the same steps above them): found once per beam
+/// with the bounds of all its groups (one slot per group) for the lanes of its main sign
+/// pattern (those of its first packet's majority), and taken by those lanes of each group.
+/// The top tree's is found at once; those of the meshes of untransformed instances as groups
+/// first enter them (up to [`MESH_ENTRIES`] meshes; the others' walks start at their roots).
+struct Entries {
+    neg: u32,
+    b: Bounds,
+    slots: u32,
+    /// The top tree's (`None`: those lanes reach no instance).
+    top: Option<(u32, Aabb)>,
+    /// Per instance entered so far, its mesh's (`None`: no leaf reached).
+    meshes: [(u32, Option<(u32, Aabb)>); MESH_ENTRIES],
+    known: usize,
+}
+
+/// The most untransformed instances a beam keeps its entry points into.
+const MESH_ENTRIES: usize = 16;
+
+impl Entries {
+    /// The bounds and the top tree's entry point of beam `rays` (`None` when it has more
+    /// groups than a bound has slots, or no lane of the main signs).
+    #[inline(always)]
+    fn new<L: Lanes, C: Counters>(
+        l: L,
+        bsp: &Bsp,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        c: &mut C,
+    ) -> Option<Self> {
+        let gs = group_size::<L>();
+        let groups = rays.len().div_ceil(gs);
+        if groups > GROUP {
+            return None;
+        }
+        let inf = l.splat(f32::INFINITY);
+        let all = l.splat_mask(true);
+        let mut b = Bounds::UNION;
+        let mut neg = 0;
+        for j in 0..rays.len() {
+            let r = &rays[j];
+            let rx = RaysX::new(l, &r.origin, &r.dir, r.tmin);
+            let mut m = active[j]
+                & r.valid(l)
+                & rx.inv[0].abs().lt(inf)
+                & rx.inv[1].abs().lt(inf)
+                & rx.inv[2].abs().lt(inf);
+            if j == 0 {
+                let mut counts = [0u32; 8];
+                let nb = [
+                    rx.neg[0].bitmask(),
+                    rx.neg[1].bitmask(),
+                    rx.neg[2].bitmask(),
+                ];
+                let mut bits = m.bitmask();
+                while bits != 0 {
+                    let i = bits.trailing_zeros();
+                    bits &= bits - 1;
+                    let p = (nb[0] >> i & 1) | (nb[1] >> i & 1) << 1 | (nb[2] >> i & 1) << 2;
+                    counts[p as usize] += 1;
+                }
+                neg = largest(&counts);
+            }
+            for k in 0..3 {
+                m = m & if neg >> k & 1 != 0 {
+                    rx.neg[k]
+                } else {
+                    all.and_not(rx.neg[k])
+                };
+            }
+            b.grow(l, j / gs, &rx, m);
+        }
+        let slots = (1u32 << groups) - 1;
+        let lim = [f32::INFINITY; GROUP];
+        let top = entry_point(l, &bsp.top, &b, neg, slots, &lim, c);
+        Some(Self {
+            neg,
+            b,
+            slots,
+            top,
+            meshes: [(0, None); MESH_ENTRIES],
+            known: 0,
+        })
+    }
+
+    /// Where the beam's groups start in the mesh `tree` of untransformed instance `inst`
+    /// (`None`: they reach none of its leaves).
+    #[inline(always)]
+    fn mesh<L: Lanes, C: Counters>(
+        &mut self,
+        l: L,
+        tree: &KdTree,
+        inst: u32,
+        c: &mut C,
+    ) -> Option<(u32, Aabb)> {
+        for k in 0..self.known {
+            if self.meshes[k].0 == inst {
+                return self.meshes[k].1;
+            }
+        }
+        if self.known == MESH_ENTRIES {
+            return Some((0, tree.bounds));
+        }
+        let lim = [f32::INFINITY; GROUP];
+        let e = entry_point(l, tree, &self.b, self.neg, self.slots, &lim, c);
+        self.meshes[self.known] = (inst, e);
+        self.known += 1;
+        e
     }
 }
 

@@ -1,13 +1,14 @@
 //! The two-level BSP of paper section 3: a kd-tree per mesh (built once, carefully) and a
 //! kd-tree over the instances' world boxes (rebuilt fast when instances move).
 
+use std::mem::MaybeUninit;
 use std::time::Instant;
 
 use coherent_accel::{
     Accel, AccelError, BuildStats, Hit1, Hits, Instance, Ray1, Rays, Scene, TriAccel, Work,
     scene::validate_instances,
 };
-use coherent_simd::Lanes;
+use coherent_simd::{Lanes, SimdMask};
 use glam::{Affine3A, Vec3};
 use rayon::prelude::*;
 
@@ -26,6 +27,9 @@ pub struct MeshTree {
     pub degenerate: usize,
     /// The leaves' records in blocks of four, for single rays ([`BspParams::simd_leaves`]).
     pub leaves4: Option<Leaves4>,
+    /// Per record, the box its projection test can hit: what beams cull a leaf's triangles
+    /// with against a group's frustum (see `frustum.rs`).
+    pub(crate) boxes: Vec<coherent_accel::Aabb>,
 }
 
 impl MeshTree {
@@ -46,6 +50,7 @@ impl MeshTree {
             degenerate: indices.len() - tris.len(),
             tris,
             leaves4: None,
+            boxes: verts.iter().map(crate::frustum::cull_box).collect(),
         }
     }
 
@@ -58,6 +63,7 @@ impl MeshTree {
     pub fn memory_bytes(&self) -> usize {
         self.tree.memory_bytes()
             + self.tris.len() * size_of::<TriAccel>()
+            + self.boxes.len() * size_of::<coherent_accel::Aabb>()
             + self.leaves4.as_ref().map_or(0, Leaves4::memory_bytes)
     }
 }
@@ -94,6 +100,20 @@ impl Bsp {
     pub fn set_traversal_params(&mut self, mailbox: bool, single_ray_threshold: Option<u32>) {
         self.params.mailbox = mailbox;
         self.params.single_ray_threshold = single_ray_threshold;
+    }
+
+    /// Turns the beams' leaf culling and their reversal of shadow segments on or off
+    /// (traversal only: no rebuild).
+    pub fn set_beam_params(&mut self, cull: bool, reverse: bool) {
+        self.params.beam_cull = cull;
+        self.params.beam_reverse = reverse;
+    }
+
+    /// Whether [`Accel::occluded_beam`] walks packets `rays` (lanes `active`, one group's
+    /// worth or fewer) from their segments' far ends back (see `reverse.rs`): their far
+    /// ends lie closer together than their near ends, and [`BspParams::beam_reverse`] is on.
+    pub fn reverses_beam<L: Lanes>(&self, l: L, rays: &[Rays<L>], active: &[L::Mask]) -> bool {
+        self.params.beam_reverse && crate::reverse::far_ends_closer(l, rays, active)
     }
 
     /// The mesh trees.
@@ -229,15 +249,36 @@ impl Bsp {
                 active: none,
                 neg_inf,
             }; GROUP];
+            // Walked from the far ends when they lie closer together (shadow rays toward
+            // one point of a light: from the light).
+            let (chunk, on) = (&rays[a..b], &active[a..b]);
+            let mut back = [MaybeUninit::<Rays<L>>::uninit(); GROUP];
+            let reverse = self.params.beam_reverse
+                && l.apart(
+                    #[inline(always)]
+                    |l| crate::reverse::far_ends_closer(l, chunk, on),
+                );
+            if reverse {
+                for j in a..b {
+                    back[j - a] = MaybeUninit::new(crate::reverse::reversed(l, &rays[j]));
+                    c.beam_reversed((active[j] & rays[j].valid(l)).count());
+                }
+            }
+            let walked: &[Rays<L>] = if reverse {
+                // SAFETY: slots `..b - a` were written just above.
+                unsafe { std::slice::from_raw_parts(back.as_ptr().cast::<Rays<L>>(), b - a) }
+            } else {
+                chunk
+            };
             for j in a..b {
                 qs[j - a] = AnyP {
-                    tmax: rays[j].tmax,
+                    tmax: walked[j - a].tmax,
                     occluded: none,
                     active: active[j] & rays[j].valid(l),
                     neg_inf,
                 };
             }
-            crate::beam::scene_beam(l, self, &rays[a..b], &active[a..b], &mut qs[..b - a], c);
+            crate::beam::scene_beam(l, self, walked, on, &mut qs[..b - a], c);
             for j in a..b {
                 occluded[j] = qs[j - a].occluded & active[j];
             }

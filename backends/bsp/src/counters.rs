@@ -45,6 +45,12 @@ pub trait Counters {
     /// called when [`Counters::TIMED`].
     #[inline(always)]
     fn beam_setup(&mut self, _ns: u64) {}
+    /// A leaf's triangle skipped for a whole group: outside its frustum.
+    #[inline(always)]
+    fn tri_culled(&mut self) {}
+    /// Lanes of a beam traced from their segments' far ends back.
+    #[inline(always)]
+    fn beam_reversed(&mut self, _lanes: u32) {}
 }
 
 impl Counters for () {}
@@ -78,6 +84,10 @@ pub struct TraversalStats {
     pub packets_transformed: u64,
     /// Time beams spent preparing their groups, nanoseconds.
     pub beam_setup_ns: u64,
+    /// Triangles skipped for a whole group at a leaf (outside the group's frustum).
+    pub tris_culled: u64,
+    /// Lanes traced from their segments' far ends (shadow rays from the light).
+    pub beam_reversed_lanes: u64,
 }
 
 impl TraversalStats {
@@ -168,5 +178,13 @@ impl Counters for TraversalStats {
     #[inline(always)]
     fn beam_setup(&mut self, ns: u64) {
         self.beam_setup_ns += ns;
+    }
+    #[inline(always)]
+    fn tri_culled(&mut self) {
+        self.tris_culled += 1;
+    }
+    #[inline(always)]
+    fn beam_reversed(&mut self, lanes: u32) {
+        self.beam_reversed_lanes += lanes as u64;
     }
 }

@@ -72,6 +72,35 @@ impl Bounds {
         tmin: [f32::INFINITY; GROUP],
     };
 
+    /// Bounds of no rays that [`Bounds::grow`] widens (a slot grown by none stays unused).
+    pub const UNION: Bounds = Bounds {
+        o_lo: [[f32::INFINITY; GROUP]; 3],
+        o_hi: [[f32::NEG_INFINITY; GROUP]; 3],
+        inv_lo: [[f32::INFINITY; GROUP]; 3],
+        inv_hi: [[f32::NEG_INFINITY; GROUP]; 3],
+        tmin: [f32::INFINITY; GROUP],
+    };
+
+    /// Widens slot `j` by lanes `m` of `r`.
+    #[inline(always)]
+    pub fn grow<L: Lanes>(&mut self, l: L, j: usize, r: &RaysX<L>, m: L::Mask) {
+        if m.none() {
+            return;
+        }
+        let (inf, ninf) = (l.splat(f32::INFINITY), l.splat(f32::NEG_INFINITY));
+        for k in 0..3 {
+            let o_lo = m.select(r.o[k], inf).reduce_min();
+            let o_hi = m.select(r.o[k], ninf).reduce_max();
+            let inv_lo = m.select(r.inv[k], inf).reduce_min();
+            let inv_hi = m.select(r.inv[k], ninf).reduce_max();
+            self.o_lo[k][j] = self.o_lo[k][j].min(o_lo);
+            self.o_hi[k][j] = self.o_hi[k][j].max(o_hi);
+            self.inv_lo[k][j] = self.inv_lo[k][j].min(inv_lo);
+            self.inv_hi[k][j] = self.inv_hi[k][j].max(inv_hi);
+        }
+        self.tmin[j] = self.tmin[j].min(m.select(r.tmin, inf).reduce_min());
+    }
+
     /// Slot `j` from lanes `m` of `r` (none: the slot is unused).
     #[inline(always)]
     pub fn set<L: Lanes>(&mut self, l: L, j: usize, r: &RaysX<L>, m: L::Mask) {
@@ -168,6 +197,139 @@ pub(crate) trait GroupLeaf<C: Counters> {
     fn leaf(&mut self, c: &mut C, items: &[u32], active: u32, vox: &Aabb);
 }
 
+/// For a split on axis `k` at `split` of the voxel whose slabs are `sl`: the slots whose
+/// rays reach the near child and those that reach the far one before `lim` (the near and
+/// far sides by the group's signs `neg`), with each slot's crossings of the split plane
+/// (lowest in `lo_s`, highest in `hi_s`).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn split_bits<L: Lanes>(
+    l: L,
+    b: &Bounds,
+    sl: &Slabs,
+    lim: &Slots,
+    k: usize,
+    split: f32,
+    lo_s: &mut Slots,
+    hi_s: &mut Slots,
+) -> (u32, u32) {
+    let (ka, kb) = OTHER[k];
+    let (mut near, mut far) = (0u32, 0u32);
+    let mut v = 0;
+    while v < group_size::<L>() {
+        let (lo, hi) = b.plane(l, k, split, v);
+        lo.store(&mut lo_s[v..]);
+        hi.store(&mut hi_s[v..]);
+        let t0o = ld(l, &sl.enter[ka], v)
+            .max(ld(l, &sl.enter[kb], v))
+            .max(ld(l, &b.tmin, v));
+        let t1o = ld(l, &sl.exit[ka], v)
+            .min(ld(l, &sl.exit[kb], v))
+            .min(ld(l, lim, v));
+        let t0 = t0o.max(ld(l, &sl.enter[k], v));
+        let t1 = t1o.min(ld(l, &sl.exit[k], v));
+        // Near child: the rays leave it through the split; far: they enter it there.
+        near |= widen_lo_s(l, t0).le(widen_hi_s(l, t1o.min(hi))).bitmask() << v;
+        far |= widen_lo_s(l, t0o.max(lo)).le(widen_hi_s(l, t1)).bitmask() << v;
+        v += L::N;
+    }
+    (near, far)
+}
+
+/// Where a walk of `tree` by the slots `active` of `b` (sign bits `neg`, limits `lim`) can
+/// start: Reshetov et al.'s entry point, the deepest node whose subtree holds every
+/// non-empty leaf they reach. The search goes down while they reach one child; at a node
+/// where they reach both it keeps the far child as a candidate and goes on near, and when a
+/// subtree turns out to hold no non-empty leaf for them and one candidate is left, the
+/// entry moves down to it. It stops at the first non-empty leaf. Returns the node and its
+/// voxel, or `None` when they reach no non-empty leaf at all.
+///
+/// Every group whose bounds lie within `b`'s slots can start its own walk there: the
+/// leaves it reaches are among these.
+#[inline(always)]
+pub(crate) fn entry_point<L: Lanes, C: Counters>(
+    l: L,
+    tree: &KdTree,
+    b: &Bounds,
+    neg: u32,
+    active: u32,
+    lim: &Slots,
+    c: &mut C,
+) -> Option<(u32, Aabb)> {
+    let nodes: &[Node] = &tree.nodes;
+    let mut sl = b.slabs(l, &tree.bounds, neg);
+    let mut act = active & sl.open(l, &b.tmin, lim);
+    if act == 0 {
+        return None;
+    }
+    let mut cands: Stack<Entry> = Stack::new();
+    let mut depth = 0usize;
+    let (mut node, mut vox) = (0usize, tree.bounds);
+    let mut entry = (0u32, vox);
+    let (mut lo_s, mut hi_s): (Slots, Slots) = ([0.0; GROUP], [0.0; GROUP]);
+    loop {
+        let n = nodes[node];
+        if n.is_leaf() {
+            if !n.items().is_empty() {
+                return Some(entry);
+            }
+        } else {
+            c.beam_step();
+            let k = (n.axis() & 3).min(2);
+            let sb = (neg >> k & 1) as usize;
+            let empty = n.empty_children();
+            let split = n.split();
+            let (near, far) = split_bits(l, b, &sl, lim, k, split, &mut lo_s, &mut hi_s);
+            let near = near & act & 0u32.wrapping_sub(!empty >> sb & 1);
+            let far = far & act & 0u32.wrapping_sub(!empty >> (sb ^ 1) & 1);
+            let (near_node, far_node) = (n.left() + sb, n.left() + 1 - sb);
+            let (mut left, mut right) = (vox, vox);
+            left.max[k] = split;
+            right.min[k] = split;
+            let (near_vox, far_vox) = if sb == 0 {
+                (left, right)
+            } else {
+                (right, left)
+            };
+            if near != 0 && far != 0 {
+                let mut f = sl;
+                f.enter[k] = lo_s;
+                cands.push(Entry {
+                    node: far_node as u32,
+                    active: far,
+                    vox: far_vox,
+                    slabs: f,
+                });
+                depth += 1;
+                sl.exit[k] = hi_s;
+                (node, act, vox) = (near_node, near, near_vox);
+                continue;
+            }
+            if near != 0 || far != 0 {
+                if near != 0 {
+                    sl.exit[k] = hi_s;
+                    (node, act, vox) = (near_node, near, near_vox);
+                } else {
+                    sl.enter[k] = lo_s;
+                    (node, act, vox) = (far_node, far, far_vox);
+                }
+                if depth == 0 {
+                    entry = (node as u32, vox);
+                }
+                continue;
+            }
+        }
+        // Nothing here for them: the next candidate, which becomes the entry when it is
+        // the last.
+        let e = cands.pop()?;
+        depth -= 1;
+        (node, act, sl, vox) = (e.node as usize, e.active, e.slabs, e.vox);
+        if depth == 0 {
+            entry = (e.node, e.vox);
+        }
+    }
+}
+
 /// A subtree still to visit: node, slots, their slabs.
 #[derive(Clone, Copy)]
 struct Entry {
@@ -177,13 +339,16 @@ struct Entry {
     slabs: Slabs,
 }
 
-/// Walks `tree` near to far with the packets of slots `active` (bounds `b`, sign bits
-/// `neg`, the same for every packet), calling `s.leaf` at each non-empty leaf some of them
-/// reach before their limits.
+/// Walks `tree` near to far from node `start` (its voxel; the root and the tree's bounds,
+/// or an [`entry_point`] of a beam the group belongs to) with the packets of slots `active`
+/// (bounds `b`, sign bits `neg`, the same for every packet), calling `s.leaf` at each
+/// non-empty leaf some of them reach before their limits.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn walk_group<L: Lanes, C: Counters, S: GroupLeaf<C>>(
     l: L,
     tree: &KdTree,
+    start: (u32, Aabb),
     b: &Bounds,
     neg: u32,
     active: u32,
@@ -191,15 +356,15 @@ pub(crate) fn walk_group<L: Lanes, C: Counters, S: GroupLeaf<C>>(
     c: &mut C,
 ) {
     let nodes: &[Node] = &tree.nodes;
-    let mut sl = b.slabs(l, &tree.bounds, neg);
+    let mut sl = b.slabs(l, &start.1, neg);
     let mut act = active & sl.open(l, &b.tmin, s.limits());
     if act == 0 {
         return;
     }
     c.beam_entry(act.count_ones());
     let mut stack: Stack<Entry> = Stack::new();
-    let mut node = 0;
-    let mut vox = tree.bounds;
+    let mut node = start.0 as usize;
+    let mut vox = start.1;
     let (mut lo_s, mut hi_s): (Slots, Slots) = ([0.0; GROUP], [0.0; GROUP]);
     loop {
         let n = nodes[node];
@@ -211,32 +376,12 @@ pub(crate) fn walk_group<L: Lanes, C: Counters, S: GroupLeaf<C>>(
             }
         } else {
             c.beam_step();
-            let k = n.axis() & 3;
-            let (ka, kb) = OTHER[k];
-            let k = k.min(2);
+            let k = (n.axis() & 3).min(2);
             let sb = (neg >> k & 1) as usize;
             let empty = n.empty_children();
             let split = n.split();
-            let lim = s.limits();
-            let (mut near, mut far) = (0u32, 0u32);
-            let mut v = 0;
-            while v < group_size::<L>() {
-                let (lo, hi) = b.plane(l, k, split, v);
-                lo.store(&mut lo_s[v..]);
-                hi.store(&mut hi_s[v..]);
-                let t0o = ld(l, &sl.enter[ka], v)
-                    .max(ld(l, &sl.enter[kb], v))
-                    .max(ld(l, &b.tmin, v));
-                let t1o = ld(l, &sl.exit[ka], v)
-                    .min(ld(l, &sl.exit[kb], v))
-                    .min(ld(l, lim, v));
-                let t0 = t0o.max(ld(l, &sl.enter[k], v));
-                let t1 = t1o.min(ld(l, &sl.exit[k], v));
-                // Near child: the rays leave it through the split; far: they enter it there.
-                near |= widen_lo_s(l, t0).le(widen_hi_s(l, t1o.min(hi))).bitmask() << v;
-                far |= widen_lo_s(l, t0o.max(lo)).le(widen_hi_s(l, t1)).bitmask() << v;
-                v += L::N;
-            }
+            let (mut near, mut far) =
+                split_bits(l, b, &sl, s.limits(), k, split, &mut lo_s, &mut hi_s);
             near &= act & 0u32.wrapping_sub(!empty >> sb & 1);
             far &= act & 0u32.wrapping_sub(!empty >> (sb ^ 1) & 1);
             let (near_node, far_node) = (n.left() + sb, n.left() + 1 - sb);

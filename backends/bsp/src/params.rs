@@ -248,6 +248,13 @@ pub struct BspParams {
     /// (Wald et al. 2001, which the paper follows). The answers are the same; incoherent
     /// packets (diffuse rays, shadow rays towards an environment) visit far fewer nodes.
     pub mixed_signs: bool,
+    /// Beams skip a leaf's triangle for every packet of a group when it lies outside the
+    /// group's frustum (see `frustum.rs`). The answers are the same either way.
+    pub beam_cull: bool,
+    /// Beams of segments whose far ends lie closer together than their near ends (shadow
+    /// rays toward one point of a light) are traced from the far end back, as one origin
+    /// (see `reverse.rs`). The answers are the same either way, up to rounding at the ends.
+    pub beam_reverse: bool,
 }
 
 impl Default for BspParams {
@@ -259,6 +266,8 @@ impl Default for BspParams {
             single_ray_threshold: None,
             simd_leaves: false,
             mixed_signs: true,
+            beam_cull: true,
+            beam_reverse: true,
         }
     }
 }
