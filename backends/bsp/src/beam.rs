@@ -414,6 +414,8 @@ fn walk_mesh<L: Lanes, Q: QueryP<L>, C: Counters>(
         l,
         tris: &mesh.tris,
         boxes: &mesh.boxes,
+        // A match, not `Option::map`: a closure may stay out of the kernel's features.
+        #[allow(clippy::manual_map)]
         cull: match &g.fr {
             Some(f) => Some(f.culler(&mesh.tree.bounds)),
             None => None,
@@ -617,7 +619,7 @@ impl Entries {
                 neg = largest(&counts);
             }
             for k in 0..3 {
-                m = m & if neg >> k & 1 != 0 {
+                m &= if neg >> k & 1 != 0 {
                     rx.neg[k]
                 } else {
                     all.and_not(rx.neg[k])
