@@ -110,8 +110,9 @@ impl Bsp {
     }
 
     /// Whether [`Accel::occluded_beam`] walks packets `rays` (lanes `active`, one group's
-    /// worth or fewer) from their segments' far ends back (see `reverse.rs`): their far
-    /// ends lie closer together than their near ends, and [`BspParams::beam_reverse`] is on.
+    /// worth or fewer) from their segments' far ends back (see `reverse.rs`) when they form
+    /// a group (more than one packet, on a backend of more than one lane): their far ends
+    /// lie closer together than their near ends, and [`BspParams::beam_reverse`] is on.
     pub fn reverses_beam<L: Lanes>(&self, l: L, rays: &[Rays<L>], active: &[L::Mask]) -> bool {
         self.params.beam_reverse && crate::reverse::far_ends_closer(l, rays, active)
     }
