@@ -337,7 +337,7 @@ struct ImageKernel<'a> {
 
 impl coherent_simd::Kernel for ImageKernel<'_> {
     type Output = ();
-    const SCALAR_EST: bool = true;
+    const BACKENDS: u32 = coherent_simd::Backend::WITH_FACTORS;
     #[inline(always)]
     fn run<L: Lanes>(self, l: L) {
         let mut r = [0.0f32; coherent_simd::MAX_LANES];
@@ -409,7 +409,7 @@ struct PlanarKernel<'a> {
 
 impl coherent_simd::Kernel for PlanarKernel<'_> {
     type Output = ();
-    const SCALAR_EST: bool = true;
+    const BACKENDS: u32 = coherent_simd::Backend::WITH_FACTORS;
     #[inline(always)]
     fn run<L: Lanes>(self, l: L) {
         let n = self.px.r.len();

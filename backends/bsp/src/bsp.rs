@@ -187,8 +187,27 @@ impl Bsp {
         self.any_beam(l, rays, active, occluded, c);
     }
 
+    /// A beam query out of line (`Lanes::apart`): one copy per lane type and counter, which
+    /// every caller shares. Inlined, each call site took its own copy of two lane walks and
+    /// the group walks' entry, and a test crate of a few beam queries per backend compiled
+    /// for over ten minutes; one call per beam costs nothing beside its walk.
     #[inline(always)]
     fn first_beam<L: Lanes, C: Counters>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        hits: &mut [Hits<L>],
+        c: &mut C,
+    ) {
+        l.apart(
+            #[inline(always)]
+            |l| self.first_beam_apart(l, rays, active, hits, c),
+        )
+    }
+
+    #[inline(always)]
+    fn first_beam_apart<L: Lanes, C: Counters>(
         &self,
         l: L,
         rays: &[Rays<L>],
@@ -224,8 +243,24 @@ impl Bsp {
         }
     }
 
+    /// Out of line, as [`Bsp::first_beam`].
     #[inline(always)]
     fn any_beam<L: Lanes, C: Counters>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        occluded: &mut [L::Mask],
+        c: &mut C,
+    ) {
+        l.apart(
+            #[inline(always)]
+            |l| self.any_beam_apart(l, rays, active, occluded, c),
+        )
+    }
+
+    #[inline(always)]
+    fn any_beam_apart<L: Lanes, C: Counters>(
         &self,
         l: L,
         rays: &[Rays<L>],

@@ -561,9 +561,25 @@ impl Obvhs {
         }
     }
 
-    /// [`coherent_accel::Accel::intersect_beam`] by the large-packet walk.
+    /// [`coherent_accel::Accel::intersect_beam`] by the large-packet walk, out of line
+    /// (`Lanes::apart`): one copy per lane type, which every caller shares, not two lane
+    /// walks and the large-packet walk inlined at each call site.
     #[inline(always)]
     pub(crate) fn beam_first_hits<L: Lanes>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        hits: &mut [Hits<L>],
+    ) {
+        l.apart(
+            #[inline(always)]
+            |l| self.beam_first_hits_apart(l, rays, active, hits),
+        )
+    }
+
+    #[inline(always)]
+    fn beam_first_hits_apart<L: Lanes>(
         &self,
         l: L,
         rays: &[Rays<L>],
@@ -615,9 +631,24 @@ impl Obvhs {
         }
     }
 
-    /// [`coherent_accel::Accel::occluded_beam`] by the large-packet walk.
+    /// [`coherent_accel::Accel::occluded_beam`] by the large-packet walk, out of line as
+    /// [`Obvhs::beam_first_hits`].
     #[inline(always)]
     pub(crate) fn beam_occluded<L: Lanes>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        occluded: &mut [L::Mask],
+    ) {
+        l.apart(
+            #[inline(always)]
+            |l| self.beam_occluded_apart(l, rays, active, occluded),
+        )
+    }
+
+    #[inline(always)]
+    fn beam_occluded_apart<L: Lanes>(
         &self,
         l: L,
         rays: &[Rays<L>],

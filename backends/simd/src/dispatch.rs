@@ -45,12 +45,29 @@ pub enum Backend {
 /// compiled without AVX.
 pub trait Kernel {
     type Output;
-    /// Whether [`Backend::ScalarEst`] runs this kernel. It exists for the factor table's
-    /// frames (and the tests that stamp it), not for every workload: each kernel that opts in
-    /// is compiled once more, and the build of every kernel on every backend is most of the
-    /// workspace's compile time. Elsewhere `run` says the backend cannot run it.
-    const SCALAR_EST: bool = false;
+    /// The backends [`Backend::run`] compiles this kernel for, a set of [`Backend::bit`]s;
+    /// on any other, `run` says the backend cannot run it. The build of every kernel on every
+    /// backend is most of the workspace's compile time, so a kernel is compiled only where it
+    /// runs: by default on [`Backend::ALL`], without [`Backend::ScalarEst`], which exists for
+    /// the factor table's frames and the tests that stamp it (those kernels add its bit,
+    /// [`Backend::WITH_FACTORS`]); a test that stamps one backend narrows its kernel to it
+    /// with [`Only`].
+    const BACKENDS: u32 = Backend::bits(&Backend::ALL);
     fn run<L: Lanes>(self, l: L) -> Self::Output;
+}
+
+/// Kernel `K` compiled for the backends of the set `BITS` alone ([`Kernel::BACKENDS`]): a
+/// test stamped for backend `B` runs `B.run(Only::<_, { B.bit() }>(k))`, and the kernel is
+/// compiled once instead of once per backend.
+pub struct Only<K, const BITS: u32>(pub K);
+
+impl<K: Kernel, const BITS: u32> Kernel for Only<K, BITS> {
+    type Output = K::Output;
+    const BACKENDS: u32 = K::BACKENDS & BITS;
+    #[inline(always)]
+    fn run<L: Lanes>(self, l: L) -> K::Output {
+        self.0.run(l)
+    }
 }
 
 /// A backend that cannot run here.
@@ -88,6 +105,25 @@ impl Backend {
     /// The backends outside the sweeps, which the command line and the factor table of
     /// `table3` name: the scalar backend with estimated arithmetic.
     pub const FACTORS: [Backend; 1] = [Backend::ScalarEst];
+
+    /// The set of [`Backend::every`], for a kernel's [`Kernel::BACKENDS`].
+    pub const WITH_FACTORS: u32 = Backend::bits(&Backend::ALL) | Backend::bits(&Backend::FACTORS);
+
+    /// This backend's bit in a set of backends ([`Kernel::BACKENDS`]).
+    pub const fn bit(self) -> u32 {
+        1 << self as u32
+    }
+
+    /// The set of the backends `list`.
+    pub const fn bits(list: &[Backend]) -> u32 {
+        let mut bits = 0;
+        let mut i = 0;
+        while i < list.len() {
+            bits |= list[i].bit();
+            i += 1;
+        }
+        bits
+    }
 
     /// Every backend the command line takes: [`Backend::ALL`], then [`Backend::FACTORS`].
     pub fn every() -> impl Iterator<Item = Backend> {
@@ -393,69 +429,85 @@ impl Backend {
                 available: Backend::available_list(),
             });
         }
-        match self {
-            Backend::Scalar => Ok(run_on(k, crate::scalar::Scalar)),
-            #[cfg(target_arch = "x86_64")]
-            Backend::ScalarEst => {
-                // A constant condition: the collector drops the arm a kernel does not opt in
-                // to, so its scalar-est copy is never compiled.
-                if K::SCALAR_EST {
-                    Ok(run_on(k, crate::scalar_est::ScalarEst))
+        // A kernel is compiled only for its backends (`Kernel::BACKENDS`): each arm's
+        // condition is a constant, which the collector resolves, so an arm left out is
+        // never compiled.
+        macro_rules! on {
+            ($b:expr, $run:expr) => {
+                if const { K::BACKENDS & $b.bit() != 0 } {
+                    Ok($run)
                 } else {
-                    Err(BackendError::Unavailable {
-                        backend: self,
-                        reason: format!(
-                            "`{}` runs only the renderer's frames, tone mapping and the lane \
-                             tests (the factor table's workload)",
-                            self.name()
-                        ),
-                        available: Backend::available_list(),
-                    })
+                    Err($b.not_compiled_for())
                 }
-            }
+            };
+        }
+        match self {
+            Backend::Scalar => on!(Backend::Scalar, run_on(k, crate::scalar::Scalar)),
+            #[cfg(target_arch = "x86_64")]
+            Backend::ScalarEst => on!(Backend::ScalarEst, run_on(k, crate::scalar_est::ScalarEst)),
             #[cfg(all(feature = "sse", target_arch = "x86_64"))]
-            Backend::Sse => Ok(run_on(k, crate::sse::Sse)),
+            Backend::Sse => on!(Backend::Sse, run_on(k, crate::sse::Sse)),
             #[cfg(feature = "wide")]
-            Backend::Wide4 => Ok(run_on(k, crate::wide::Wide4)),
+            Backend::Wide4 => on!(Backend::Wide4, run_on(k, crate::wide::Wide4)),
             #[cfg(feature = "wide")]
-            Backend::Wide8 => Ok(run_on(k, crate::wide::Wide8)),
+            Backend::Wide8 => on!(Backend::Wide8, run_on(k, crate::wide::Wide8)),
             #[cfg(feature = "wide")]
-            Backend::Wide16 => Ok(run_on(k, crate::wide::Wide16)),
+            Backend::Wide16 => on!(Backend::Wide16, run_on(k, crate::wide::Wide16)),
             #[cfg(all(feature = "pulp", target_arch = "x86_64"))]
-            Backend::Avx2 => {
+            Backend::Avx2 => on!(Backend::Avx2, {
                 let l = crate::avx2::Avx2::try_new().expect("checked by unavailable_reason");
-                Ok(l.simd().vectorize(
+                l.simd().vectorize(
                     #[inline(always)]
                     move || k.run(l),
-                ))
-            }
+                )
+            }),
             #[cfg(all(feature = "pulp", target_arch = "x86_64"))]
-            Backend::Avx512 => {
+            Backend::Avx512 => on!(Backend::Avx512, {
                 let l = crate::avx512::Avx512::try_new().expect("checked by unavailable_reason");
-                Ok(l.simd().vectorize(
+                l.simd().vectorize(
                     #[inline(always)]
                     move || k.run(l),
-                ))
-            }
+                )
+            }),
             // The portable backends: pulp calls `WithKernel::with_simd` with its token inside
             // the token's `#[target_feature]` entry point.
             #[cfg(all(feature = "pulp", target_arch = "x86_64"))]
-            Backend::Pulp8 => {
+            Backend::Pulp8 => on!(Backend::Pulp8, {
                 let s = pulp::x86::V3::try_new().expect("checked by unavailable_reason");
-                Ok(pulp::Simd::vectorize(s, crate::pulp::WithKernel(k)))
-            }
+                pulp::Simd::vectorize(s, crate::pulp::WithKernel(k))
+            }),
             #[cfg(all(feature = "pulp", target_arch = "x86_64"))]
-            Backend::Pulp16 => {
+            Backend::Pulp16 => on!(Backend::Pulp16, {
                 let s = pulp::x86::V4::try_new().expect("checked by unavailable_reason");
-                Ok(pulp::Simd::vectorize(s, crate::pulp::WithKernel(k)))
-            }
+                pulp::Simd::vectorize(s, crate::pulp::WithKernel(k))
+            }),
             #[cfg(all(feature = "pulp", target_arch = "aarch64"))]
-            Backend::Pulp4 => {
+            Backend::Pulp4 => on!(Backend::Pulp4, {
                 let s = pulp::aarch64::Neon::try_new().expect("checked by unavailable_reason");
-                Ok(pulp::Simd::vectorize(s, crate::pulp::WithKernel(k)))
-            }
+                pulp::Simd::vectorize(s, crate::pulp::WithKernel(k))
+            }),
             #[allow(unreachable_patterns)]
             _ => unreachable!("{} is not compiled in, checked above", self.name()),
+        }
+    }
+}
+
+impl Backend {
+    /// Why this backend cannot run a kernel not compiled for it ([`Kernel::BACKENDS`]).
+    fn not_compiled_for(self) -> BackendError {
+        let reason = if self == Backend::ScalarEst {
+            format!(
+                "`{}` runs only the renderer's frames, tone mapping and the lane tests (the \
+                 factor table's workload)",
+                self.name()
+            )
+        } else {
+            "this workload is not compiled for it".to_string()
+        };
+        BackendError::Unavailable {
+            backend: self,
+            reason,
+            available: Backend::available_list(),
         }
     }
 }
@@ -622,7 +674,7 @@ mod tests {
     struct Lanes_;
     impl Kernel for Lanes_ {
         type Output = usize;
-        const SCALAR_EST: bool = true;
+        const BACKENDS: u32 = Backend::WITH_FACTORS;
         fn run<L: Lanes>(self, _l: L) -> usize {
             L::N
         }
@@ -661,6 +713,27 @@ mod tests {
             assert_eq!(Backend::ScalarEst.run(Lanes_), Ok(1));
             let e = Backend::ScalarEst.run(NotOptedIn).unwrap_err();
             assert!(e.to_string().contains("scalar-est"), "{e}");
+        }
+    }
+
+    #[test]
+    fn only_runs_a_kernel_on_its_backends() {
+        let scalar = Backend::Scalar.run(Only::<_, { Backend::Scalar.bit() }>(Lanes_));
+        assert_eq!(scalar, Ok(1));
+        for b in Backend::available()
+            .into_iter()
+            .filter(|b| *b != Backend::Scalar)
+        {
+            let e = b
+                .run(Only::<_, { Backend::Scalar.bit() }>(Lanes_))
+                .unwrap_err();
+            assert!(e.to_string().contains("not compiled for it"), "{e}");
+            assert_eq!(b.run(Lanes_), Ok(b.lanes()), "{b}");
+        }
+        // Narrowing never widens: scalar-est stays out of a kernel that left it out.
+        let wide = Only::<_, { Backend::WITH_FACTORS }>(NotOptedIn);
+        if Backend::ScalarEst.is_available() {
+            assert!(Backend::ScalarEst.run(wide).is_err());
         }
     }
 

@@ -64,4 +64,4 @@ mod x86;
 
 pub mod dispatch;
 
-pub use dispatch::{Backend, BackendError, Kernel};
+pub use dispatch::{Backend, BackendError, Kernel, Only};

@@ -37,7 +37,7 @@ struct Ops<'a>(&'a Inputs);
 
 impl Kernel for Ops<'_> {
     type Output = Results;
-    const SCALAR_EST: bool = true;
+    const BACKENDS: u32 = Backend::WITH_FACTORS;
     fn run<L: Lanes>(self, l: L) -> Results {
         let inp = self.0;
         let mut out: Results = Vec::new();
