@@ -73,6 +73,12 @@ fn renderer(s: &RenderScene, kind: AccelKind) -> Option<Renderer<'_, AnyAccel>> 
     let accel = match AnyAccel::build(&s.accel_scene(), &AnyParams::of(kind)) {
         Ok(a) => a,
         Err(AccelError::Unavailable { reason, .. }) => {
+            // Embree's library comes from the set-up; scripts/test.sh requires it where the
+            // registries have it.
+            assert!(
+                !coherent::require::required("COHERENT_REQUIRE_ACCELERATORS"),
+                "accelerator {kind}: {reason} (COHERENT_REQUIRE_ACCELERATORS is set)"
+            );
             eprintln!("skipping accelerator {kind}: {reason}");
             return None;
         }
@@ -1096,6 +1102,8 @@ fn every_scene_file_renders() {
         rendered += 1;
     }
     eprintln!("{rendered} of {} scene files rendered", files.len());
+    // The generated scenes need no fetched asset: a run that renders none checked nothing.
+    assert!(rendered > 0, "no scene file rendered");
 }
 
 #[test]
