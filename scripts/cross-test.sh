@@ -4,12 +4,12 @@
 # emulator. Needs root and apt (a Debian bookworm system, as the native set-up does).
 #
 # Usage: scripts/cross-test.sh [--lanes|--all] [--reproduce] [extra cargo test arguments]
-#   (default) the crates below the renderer, whole (about 8 minutes from a clean tree): the
+#   (default) the crates below the renderer, whole (what CI runs): the
 #             lane trait bit for bit on every aarch64 backend (backends/simd/tests/lanes.rs),
 #             the approximations' error bounds, the traversal interface and the two-level BSP
 #             against brute force (packets and builds; beams and watertightness with --all);
 #   --lanes   only the lane crate's tests (coherent-simd: the lane trait bit for bit on every
-#             aarch64 backend, the approximations' error bounds, dispatch): what CI runs;
+#             aarch64 backend, the approximations' error bounds, dispatch);
 #   --all     the whole workspace: the renderer against closed forms, renders per backend and
 #             accelerator, obvhs, the `coherent` and `reproduce` command lines (the build
 #             takes about 25 minutes on 2 cores, the tests about 8 under emulation);

@@ -190,7 +190,8 @@ impl Bsp {
     /// A beam query out of line (`Lanes::apart`): one copy per lane type and counter, which
     /// every caller shares. Inlined, each call site took its own copy of two lane walks and
     /// the group walks' entry, and a test crate of a few beam queries per backend compiled
-    /// for over ten minutes; one call per beam costs nothing beside its walk.
+    /// for over ten minutes; one call per beam costs nothing beside its walk. A beam of one
+    /// packet stays inline.
     #[inline(always)]
     fn first_beam<L: Lanes, C: Counters>(
         &self,
@@ -200,6 +201,12 @@ impl Bsp {
         hits: &mut [Hits<L>],
         c: &mut C,
     ) {
+        // A beam of one packet is the lane walk, inline as the lane query is: the control
+        // that a beam costs nothing over its packets.
+        if let ([r], [m], [h]) = (rays, active, &mut *hits) {
+            *h = self.first(l, r, *m, c);
+            return;
+        }
         l.apart(
             #[inline(always)]
             |l| self.first_beam_apart(l, rays, active, hits, c),
@@ -253,6 +260,10 @@ impl Bsp {
         occluded: &mut [L::Mask],
         c: &mut C,
     ) {
+        if let ([r], [m], [o]) = (rays, active, &mut *occluded) {
+            *o = self.any(l, r, *m, c);
+            return;
+        }
         l.apart(
             #[inline(always)]
             |l| self.any_beam_apart(l, rays, active, occluded, c),

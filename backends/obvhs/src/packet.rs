@@ -572,6 +572,11 @@ impl Obvhs {
         active: &[L::Mask],
         hits: &mut [Hits<L>],
     ) {
+        // A beam of one packet is the packet query, inline as that query is.
+        if let ([r], [m], [h]) = (rays, active, &mut *hits) {
+            *h = coherent_accel::Accel::intersect(self, l, r, *m);
+            return;
+        }
         l.apart(
             #[inline(always)]
             |l| self.beam_first_hits_apart(l, rays, active, hits),
@@ -641,6 +646,10 @@ impl Obvhs {
         active: &[L::Mask],
         occluded: &mut [L::Mask],
     ) {
+        if let ([r], [m], [o]) = (rays, active, &mut *occluded) {
+            *o = coherent_accel::Accel::occluded(self, l, r, *m);
+            return;
+        }
         l.apart(
             #[inline(always)]
             |l| self.beam_occluded_apart(l, rays, active, occluded),

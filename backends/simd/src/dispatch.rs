@@ -540,24 +540,31 @@ fn cpu_reports(b: Backend) -> bool {
                     && has!("avx512vl")
             }
             Backend::Pulp4 => false,
-            _ => true,
+            // SSE2 is part of x86-64 itself; `wide` and scalar need nothing more. No default
+            // arm: a new backend must say what it needs.
+            Backend::Scalar
+            | Backend::ScalarEst
+            | Backend::Sse
+            | Backend::Wide4
+            | Backend::Wide8
+            | Backend::Wide16 => true,
         }
-    }
-    #[cfg(target_arch = "aarch64")]
-    if b == Backend::Pulp4 {
-        return std::arch::is_aarch64_feature_detected!("neon");
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
-        !matches!(
-            b,
+        match b {
             Backend::Sse
-                | Backend::Avx2
-                | Backend::Avx512
-                | Backend::Pulp8
-                | Backend::Pulp16
-                | Backend::ScalarEst
-        )
+            | Backend::Avx2
+            | Backend::Avx512
+            | Backend::Pulp8
+            | Backend::Pulp16
+            | Backend::ScalarEst => false,
+            #[cfg(target_arch = "aarch64")]
+            Backend::Pulp4 => std::arch::is_aarch64_feature_detected!("neon"),
+            #[cfg(not(target_arch = "aarch64"))]
+            Backend::Pulp4 => false,
+            Backend::Scalar | Backend::Wide4 | Backend::Wide8 | Backend::Wide16 => true,
+        }
     }
 }
 

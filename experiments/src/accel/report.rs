@@ -4,6 +4,7 @@
 use std::collections::BTreeMap;
 
 use coherent::accel_any::AccelKind;
+use coherent::simd::Backend;
 use coherent_accel::workload::RayKind;
 
 use super::{
@@ -55,8 +56,11 @@ fn beam_report(t: &crate::Table) -> anyhow::Result<Option<String>> {
         "Embree's fastest".to_owned(),
     ];
     header.extend(sizes.iter().map(|(n, b)| format!("beam {n} ({b})")));
+    header.push("one packet / lanes".to_owned());
     header.push("best beam / lanes".to_owned());
     header.push("best beam / Embree".to_owned());
+    // A beam of one packet is the control (its cost over the lane query), not a beam.
+    let one_packet = |n: usize, b: &str| Backend::named(b).is_some_and(|b| b.lanes() == n);
     let mut rows = Vec::new();
     for (scene, rays, accel) in &keys {
         let of = |pred: &dyn Fn(usize) -> anyhow::Result<bool>| -> anyhow::Result<Option<f64>> {
@@ -75,6 +79,7 @@ fn beam_report(t: &crate::Table) -> anyhow::Result<Option<String>> {
         row.push(lanes.map_or("-".into(), fmt_num));
         row.push(embree.map_or("-".into(), fmt_num));
         let mut best_beam: Option<f64> = None;
+        let mut control: Option<f64> = None;
         for (n, b) in &sizes {
             let v = of(&|r| {
                 Ok(is_beam(t, r)
@@ -82,7 +87,9 @@ fn beam_report(t: &crate::Table) -> anyhow::Result<Option<String>> {
                     && t.f64(r, "width")? as usize == *n
                     && t.get(r, "backend")? == b)
             })?;
-            if b != "scalar" {
+            if one_packet(*n, b) {
+                control = v;
+            } else if b != "scalar" {
                 best_beam = match (best_beam, v) {
                     (Some(x), Some(y)) => Some(x.max(y)),
                     (x, y) => x.or(y),
@@ -94,6 +101,7 @@ fn beam_report(t: &crate::Table) -> anyhow::Result<Option<String>> {
             (Some(a), Some(b)) if b > 0.0 => format!("{:.2}", a / b),
             _ => "-".into(),
         };
+        row.push(ratio(control, lanes));
         row.push(ratio(best_beam, lanes));
         row.push(ratio(best_beam, embree));
         rows.push(row);
@@ -104,8 +112,10 @@ fn beam_report(t: &crate::Table) -> anyhow::Result<Option<String>> {
          obvhs' large packets (Wald et al. 2007, over the BVH2 each CWBVH is built from) on \
          square tiles of `width` rays (the beam-size sweep on the widest backend; the scalar \
          backend's beams cull without SIMD), beside the structure's own fastest lane row (BSP \
-         packets; obvhs, single rays) and Embree's fastest row (any width). The same rays, one \
-         thread.\n\n{}",
+         packets; obvhs, single rays) and Embree's fastest row (any width). A beam of one \
+         packet (as many rays as the backend's lanes) is the control: its rate over the lane \
+         row is what entering a beam costs; the best beam is over the larger ones. The same \
+         rays, one thread.\n\n{}",
         markdown_table(&header, &rows)
     )))
 }
@@ -599,6 +609,7 @@ mod tests {
     fn beams_are_reported_per_structure() {
         let csv = "scene,accel,rays,width,mrays_per_s,build_ms,memory_bytes,hits,t_sum,query,backend\n\
                    room,bsp,primary,16,10.0,1,1,5,0,lanes,avx512\n\
+                   room,bsp,primary,16,9.0,1,1,5,0,beam,avx512\n\
                    room,bsp,primary,64,20.0,1,1,5,0,beam,avx512\n\
                    room,obvhs,primary,1,2.0,1,1,5,0,lanes,single\n\
                    room,obvhs,primary,64,6.0,1,1,5,0,beam,avx512\n\
@@ -609,11 +620,14 @@ mod tests {
         let t = crate::Table::read(&path, HEADER).unwrap();
         let md = beam_report(&t).unwrap().unwrap();
         assert!(
-            md.contains("| room | primary | bsp | 10.0 | 30.0 | 20.0 | 2.00 | 0.67 |"),
+            md.contains(
+                "| room | primary | bsp | 10.0 | 30.0 | 9.00 | 20.0 | 0.90 | 2.00 | 0.67 |"
+            ),
             "{md}"
         );
+        // obvhs has no one-packet beam here: no control, and its beam of 64 is its best.
         assert!(
-            md.contains("| room | primary | obvhs | 2.00 | 30.0 | 6.00 | 3.00 | 0.20 |"),
+            md.contains("| room | primary | obvhs | 2.00 | 30.0 | - | 6.00 | - | 3.00 | 0.20 |"),
             "{md}"
         );
     }
