@@ -1,5 +1,5 @@
 //! Build script of `coherent`: records how this binary was built (compiler version, RUSTFLAGS,
-//! profile) for `machine.json` and `coherent info` (the results contract of DESIGN.md).
+//! profile) for `machine.json` and `coherent info` (the results files of docs/experiments.md).
 
 use std::env;
 use std::process::Command;

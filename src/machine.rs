@@ -1,7 +1,7 @@
 //! The machine a measurement ran on: CPU, SIMD features found at run time, how the binary was
 //! built (compiler, RUSTFLAGS, compile-time target features) and the source revision. Written
-//! beside every result as `machine.json` (DESIGN.md, results contract; paper section 7 names
-//! its machines the same way) and shown by `coherent info`.
+//! beside every result as `machine.json` (docs/experiments.md lists the results; paper
+//! section 7 names its machines the same way) and shown by `coherent info`.
 
 use crate::simd::Backend;
 use serde::{Deserialize, Serialize};

@@ -1,6 +1,6 @@
-//! The `coherent` command line (DESIGN.md, "The CLI"): `coherent render` renders a scene with
-//! the packet renderer (paper section 7), `coherent scenes` lists the built-in scenes,
-//! `coherent info` describes the CPU, the build and the lane backends.
+//! The `coherent` command line (the README says how to use it): `coherent render` renders a
+//! scene with the packet renderer (paper section 7), `coherent scenes` lists the built-in
+//! scenes, `coherent info` describes the CPU, the build and the lane backends.
 
 use clap::{Parser, Subcommand};
 use coherent::accel_any::AccelKind;

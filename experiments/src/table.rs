@@ -2,7 +2,8 @@
 //! reading them back with the header checked, and rendering Markdown for `results/README.md`,
 //! including the paper's figures beside ours.
 //!
-//! The headers are the results contract of DESIGN.md: a CSV is only ever written and read
+//! The headers are the results contract (file names and columns that other tools read, listed
+//! per experiment in docs/experiments.md): a CSV is only ever written and read
 //! against the header its experiment declares, so a renamed column fails loudly.
 
 use anyhow::{Context, anyhow, bail};
