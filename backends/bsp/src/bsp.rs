@@ -189,9 +189,8 @@ impl Bsp {
 
     /// A beam query out of line (`Lanes::apart`): one copy per lane type and counter, which
     /// every caller shares. Inlined, each call site took its own copy of two lane walks and
-    /// the group walks' entry, and a test crate of a few beam queries per backend compiled
-    /// for over ten minutes; one call per beam costs nothing beside its walk. A beam of one
-    /// packet stays inline.
+    /// the group walks' entry (the build's cost: docs/architecture.md); one call per beam
+    /// costs nothing beside its walk. A beam of one packet stays inline (the control).
     #[inline(always)]
     fn first_beam<L: Lanes, C: Counters>(
         &self,
