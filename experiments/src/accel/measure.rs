@@ -9,7 +9,7 @@ use coherent_accel::scenes::{BuiltinScene, SceneSize};
 use coherent_accel::workload;
 use coherent_accel::workload::{Clock, PassResult, RayKind, TimeBeams, TimePackets};
 
-use super::rays::{beam_side, beams, from_primary, rays, widths};
+use super::rays::{beam_side, beams, from_primary, rays, rays_in_tiles, shapes, widths};
 use super::{counters, embree, leaves};
 use crate::ctx::Ctx;
 use crate::table::CsvOut;
@@ -34,22 +34,30 @@ pub(super) struct Setup {
     pub widths: Vec<(usize, Option<Backend>)>,
     /// The beams: (rays per beam, backend), those whose tiles divide the image.
     pub beams: Vec<(usize, Backend)>,
+    /// Lane packets of other shapes: (tile width and height, backend), those whose tiles
+    /// divide the image.
+    pub shapes: Vec<((u32, u32), Backend)>,
 }
 
 impl Setup {
     pub(super) fn new(ctx: &mut Ctx) -> Self {
         let (w, h): (u32, u32) = ctx.pick((256, 192), (1024, 768));
+        let widths = widths(ctx);
         Self {
             size: ctx.pick(SceneSize::Quick, SceneSize::Full),
             w,
             h,
             samples: ctx.pick(3, 7),
             repeats: ctx.pick(3, 2),
-            widths: widths(ctx),
             beams: beams()
                 .into_iter()
                 .filter(|&(n, _)| w.is_multiple_of(beam_side(n)) && h.is_multiple_of(beam_side(n)))
                 .collect(),
+            shapes: shapes(&widths)
+                .into_iter()
+                .filter(|&((tw, th), _)| w.is_multiple_of(tw) && h.is_multiple_of(th))
+                .collect(),
+            widths,
         }
     }
 }
@@ -64,6 +72,8 @@ pub(super) struct Outputs {
     pub embree: CsvOut,
     /// `accel_simd_leaves.csv`.
     pub leaves: CsvOut,
+    /// `accel_shapes.csv`.
+    pub shapes: CsvOut,
 }
 
 impl Outputs {
@@ -73,6 +83,7 @@ impl Outputs {
             traversal: ctx.csv("accel_traversal.csv", super::TRAVERSAL_HEADER)?,
             embree: ctx.csv("accel_embree.csv", super::EMBREE_HEADER)?,
             leaves: ctx.csv("accel_simd_leaves.csv", super::LEAVES_HEADER)?,
+            shapes: ctx.csv("accel_shapes.csv", super::SHAPES_HEADER)?,
         })
     }
 
@@ -81,6 +92,7 @@ impl Outputs {
         self.traversal.finish()?;
         self.embree.finish()?;
         self.leaves.finish()?;
+        self.shapes.finish()?;
         Ok(())
     }
 }
@@ -278,6 +290,8 @@ pub(super) struct KindRun<'a> {
     /// The rays of each beam of `setup.beams`, tile by tile (none for diffuse rays: beams
     /// are for coherent rays only).
     pub beam_sets: Vec<Vec<Ray1>>,
+    /// The rays of each lane-packet shape of `setup.shapes`, tile by tile.
+    pub shape_sets: Vec<Vec<Ray1>>,
 }
 
 impl<'a> KindRun<'a> {
@@ -301,6 +315,11 @@ impl<'a> KindRun<'a> {
                 })
                 .collect()
         };
+        let shape_sets = setup
+            .shapes
+            .iter()
+            .map(|&(tile, _)| rays_in_tiles(s, bsp, kind, w, h, tile))
+            .collect();
         Self {
             setup,
             s,
@@ -308,6 +327,7 @@ impl<'a> KindRun<'a> {
             kind,
             sets,
             beam_sets,
+            shape_sets,
         }
     }
 
@@ -318,6 +338,7 @@ impl<'a> KindRun<'a> {
         let widths = &self.setup.widths;
         let mut v: Vec<(Who, usize)> = (0..widths.len()).map(|i| (Who::Bsp, i)).collect();
         v.extend((0..self.beam_sets.len()).map(|b| (Who::Beam, b)));
+        v.extend((0..self.shape_sets.len()).map(|i| (Who::Shape, i)));
         for (k, o) in others.iter().enumerate() {
             for (i, &(wd, _)) in widths.iter().enumerate() {
                 if wd == 1 || o.kind.has_packets() {
@@ -350,6 +371,12 @@ impl<'a> KindRun<'a> {
             match who {
                 Who::Bsp => pass_any(self.bsp, &self.sets[i], occlusion, widths[i].1),
                 Who::Beam => pass_beam(self.bsp, &self.beam_sets[i], occlusion, beams[i]),
+                Who::Shape => pass_any(
+                    self.bsp,
+                    &self.shape_sets[i],
+                    occlusion,
+                    Some(self.setup.shapes[i].1),
+                ),
                 Who::OtherBeam(k) => others[k].accel.visit(PassBeam {
                     rays: &self.beam_sets[i],
                     occlusion,
@@ -375,6 +402,7 @@ impl<'a> KindRun<'a> {
             &res,
             disagreements,
         )?;
+        self.shape_rows(&mut out.shapes, &variants, &res, disagreements)?;
         embree::rows(
             &mut out.embree,
             self.s.name,
@@ -406,7 +434,7 @@ impl<'a> KindRun<'a> {
                     others[k].build_ms,
                     others[k].accel.memory_bytes(),
                 ),
-                Who::EmbreePlain(_) | Who::EmbreeTrait(_) => continue,
+                Who::Shape | Who::EmbreePlain(_) | Who::EmbreeTrait(_) => continue,
             };
             let (n, width, query, backend) = match who {
                 Who::Beam | Who::OtherBeam(_) => (
@@ -449,12 +477,61 @@ impl<'a> KindRun<'a> {
     }
 }
 
+impl KindRun<'_> {
+    /// The rows of `accel_shapes.csv`: each lane-packet shape beside the square tile of the
+    /// same width and backend (timed in the same interleaved samples), cross-checked like
+    /// every row of `accel.csv`.
+    fn shape_rows(
+        &self,
+        csv: &mut CsvOut,
+        variants: &[(Who, usize)],
+        res: &[(f64, PassResult)],
+        disagreements: &mut Vec<String>,
+    ) -> anyhow::Result<()> {
+        let rate = |v: usize, n: usize| n as f64 / res[v].0 / 1e6;
+        for (v, &(who, i)) in variants.iter().enumerate() {
+            if who != Who::Shape {
+                continue;
+            }
+            let ((tw, th), b) = self.setup.shapes[i];
+            let lanes = (tw * th) as usize;
+            let square = variants
+                .iter()
+                .position(|&(who, j)| who == Who::Bsp && self.setup.widths[j] == (lanes, Some(b)));
+            let n = self.shape_sets[i].len();
+            let mrays = rate(v, n);
+            let over = square.map_or(f64::NAN, |s| {
+                mrays / rate(s, self.sets[variants[s].1].len())
+            });
+            csv.row(&[
+                &self.s.name,
+                &self.kind.name(),
+                &format!("{tw}x{th}"),
+                &b.name(),
+                &format!("{mrays:.3}"),
+                &format!("{over:.3}"),
+            ])?;
+            if let Some(why) = disagreement(&res[0].1, &res[v].1, n) {
+                disagreements.push(format!(
+                    "{} {} rays, bsp lane packets {tw}x{th} on {}: {why}",
+                    self.s.name,
+                    self.kind.name(),
+                    b.name()
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Which configuration a timed sample runs.
 #[derive(Clone, Copy, PartialEq, Eq)]
 pub(super) enum Who {
     Bsp,
     /// The BSP's beams: `Setup::beams[i]`.
     Beam,
+    /// The BSP's lane packets shaped `Setup::shapes[i]`.
+    Shape,
     /// `others[k]`.
     Other(usize),
     /// `others[k]`'s own beams (obvhs): `Setup::beams[i]`.

@@ -44,6 +44,10 @@
 //! beam rows too (`accel` obvhs, the same sizes and rays): its large-packet traversal over
 //! a BVH2 built beside each of its CWBVHs (`coherent_obvhs::packet`; here obvhs is built
 //! with them, so its `build_ms` and `memory_bytes` include them).
+//!
+//! Packet shapes (`accel_shapes.csv`): the BSP's 16-lane packets as rows of 8 x 2 and 16 x 1
+//! rays, timed interleaved with the 4 x 4 rows of `accel.csv` over the same rays in their own
+//! tile order: what the shape alone costs.
 
 mod counters;
 mod embree;
@@ -73,6 +77,7 @@ pub const EXPERIMENT: Experiment = Experiment {
         "accel_traversal.csv",
         "accel_simd_leaves.csv",
         "accel_mixed_signs.csv",
+        "accel_shapes.csv",
     ],
     plots: &[
         "accel_speedup_vs_width",
@@ -113,6 +118,15 @@ const LEAVES_HEADER: &[&str] = &[
     "bsp_over_embree",
     "tests_per_ray",
     "memory_bytes",
+];
+
+const SHAPES_HEADER: &[&str] = &[
+    "scene",
+    "rays",
+    "shape",
+    "backend",
+    "mrays_per_s",
+    "over_square",
 ];
 
 const EMBREE_HEADER: &[&str] = &[

@@ -34,6 +34,17 @@ pub(super) fn beams() -> Vec<(usize, Backend)> {
     v
 }
 
+/// Lane packets of other shapes than the square tile: rows of 8 x 2 and 16 x 1 rays on the
+/// backend of width 16, if there is one (what the packets' shape alone costs, beside its 4 x 4
+/// row in `accel.csv`).
+pub(super) fn shapes(widths: &[(usize, Option<Backend>)]) -> Vec<((u32, u32), Backend)> {
+    widths
+        .iter()
+        .filter_map(|&(w, b)| b.filter(|_| w == 16))
+        .flat_map(|b| [((8, 2), b), ((16, 1), b)])
+        .collect()
+}
+
 /// The side of a square beam of `n` rays.
 pub(super) fn beam_side(n: usize) -> u32 {
     (n as f64).sqrt().round() as u32
@@ -60,7 +71,7 @@ pub(crate) fn rays(
 }
 
 /// The rays of one kind, ordered tile by tile (`tile`: width and height in pixels).
-fn rays_in_tiles(
+pub(super) fn rays_in_tiles(
     s: &BuiltinScene,
     bsp: &Bsp,
     kind: RayKind,

@@ -8,7 +8,8 @@ use coherent::simd::Backend;
 use coherent_accel::workload::RayKind;
 
 use super::{
-    EMBREE_HEADER, HEADER, LEAVES_HEADER, MIXED_HEADER, THRESHOLD_HEADER, TRAVERSAL_HEADER,
+    EMBREE_HEADER, HEADER, LEAVES_HEADER, MIXED_HEADER, SHAPES_HEADER, THRESHOLD_HEADER,
+    TRAVERSAL_HEADER,
 };
 use crate::ctx::Ctx;
 use crate::manycore::{MANYCORE, manycore_machine};
@@ -205,6 +206,15 @@ pub(super) fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     }
     if let Some(b) = beam_report(&t)? {
         md.push_str(&b);
+    }
+    if let Some(t) = ctx.read_csv("accel_shapes.csv", SHAPES_HEADER)? {
+        md.push_str(
+            "\nThe packets' shape alone (`accel_shapes.csv`): the BSP's 16-lane packets as rows \
+             of a tile (8 x 2, 16 x 1) beside the same packets as 4 x 4 squares (`over_square`: \
+             the row's rate over the square's), the same rays in each tile order, timed \
+             interleaved with the rows above.\n\n",
+        );
+        md.push_str(&t.to_markdown());
     }
     if let Some(th) = ctx.read_csv("accel_threshold.csv", THRESHOLD_HEADER)? {
         md.push_str(&threshold_table(&th)?);
