@@ -30,6 +30,11 @@ pub struct Args {
     /// from (wherever it is run); a relative DIR is taken from the current directory.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Write into the repository's `results/` from a tree with uncommitted changes (refused
+    /// otherwise: a figure must name the revision that produced it). Every section and the
+    /// headline then say the run's tree was not committed.
+    #[arg(long)]
+    pub allow_dirty: bool,
 }
 
 fn after_help() -> String {
@@ -94,6 +99,21 @@ pub fn main(args: impl IntoIterator<Item = OsString>, registry: &[Experiment]) -
     }
 }
 
+/// Refuses a run into the repository's own `results/` from a revision with uncommitted
+/// changes (`git_rev` ends in `-dirty`) unless `allow` (`--allow-dirty`); other folders take
+/// any run.
+fn refuse_dirty(out: &Path, git_rev: &str, allow: bool) -> anyhow::Result<()> {
+    if git_rev.ends_with("-dirty") && !allow && crate::root_readme::is_repository_results(out) {
+        bail!(
+            "refusing to write {} from a tree with uncommitted changes (revision {git_rev}): \
+             commit them first, write elsewhere with --out DIR, or pass --allow-dirty (the \
+             report and the headline then say the run was not committed)",
+            out.display()
+        );
+    }
+    Ok(())
+}
+
 /// Creates the output folder and checks it is a writable folder.
 pub fn prepare_out(out: &Path) -> anyhow::Result<()> {
     if out.exists() && !out.is_dir() {
@@ -148,6 +168,7 @@ fn run(
         return Ok(());
     }
     let machine = Machine::detect();
+    refuse_dirty(&out, &machine.git_rev, args.allow_dirty)?;
     let previous = std::fs::read_to_string(&machine_json).ok();
     std::fs::write(
         &machine_json,
@@ -239,6 +260,22 @@ fn write_readme(ctx: &Ctx, registry: &[Experiment], info: RunInfo) -> anyhow::Re
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_dirty_tree_may_not_write_the_repositorys_results() {
+        let results = default_out();
+        if !results.is_dir() {
+            return; // a binary moved away from its tree has no repository results
+        }
+        let err = refuse_dirty(&results, "0123abc-dirty", false).unwrap_err();
+        assert!(err.to_string().contains("--allow-dirty"), "{err}");
+        assert!(err.to_string().contains("0123abc-dirty"), "{err}");
+        // Allowed when asked, from a committed tree, and into any other folder.
+        refuse_dirty(&results, "0123abc-dirty", true).unwrap();
+        refuse_dirty(&results, "0123abc", false).unwrap();
+        let elsewhere = tempfile::tempdir().unwrap();
+        refuse_dirty(elsewhere.path(), "0123abc-dirty", false).unwrap();
+    }
 
     #[test]
     fn the_output_folder_is_created_or_refused_with_its_path() {

@@ -69,6 +69,8 @@ pub fn render(ctx: &Ctx, registry: &[Experiment]) -> String {
     }
     md.push_str(&table(ctx, registry, emulated.is_some()));
     md.push('\n');
+    md.push_str(&runs_note(ctx));
+    md.push_str("\n\n");
 
     let plots: Vec<String> = PLOTS
         .iter()
@@ -94,6 +96,7 @@ pub fn render(ctx: &Ctx, registry: &[Experiment]) -> String {
 /// The paper's Tables 1-5 against ours, a line each, as a Markdown table (links relative to
 /// the results folder). `emulated`: the run's times are an emulator's, so none is compared.
 pub fn table(ctx: &Ctx, registry: &[Experiment], emulated: bool) -> String {
+    let json = std::fs::read_to_string(ctx.path("machine.json")).unwrap_or_default();
     let rows: Vec<Vec<String>> = [
         ("table1", table1_row(ctx)),
         ("table2", table2_row(ctx)),
@@ -123,13 +126,61 @@ pub fn table(ctx: &Ctx, registry: &[Experiment], emulated: bool) -> String {
         } else {
             file.to_owned()
         };
-        vec![title, what.to_owned(), paper, ours, file]
+        let run = crate::machine_keys::run_of(&json, name)
+            .map_or_else(|| "not recorded".to_owned(), |r| r.label());
+        vec![title, what.to_owned(), paper, ours, file, run]
     })
     .collect();
     markdown_table(
-        &["paper", "compared", "paper's figures", "ours", "CSV"],
+        &["paper", "compared", "paper's figures", "ours", "CSV", "run"],
         &rows,
     )
+}
+
+/// The experiments of the headline's rows.
+const HEADLINE_EXPERIMENTS: [&str; 5] = ["table1", "table2", "table3", "table4", "table5"];
+
+/// Where the headline's rows come from: one run named, or the runs counted when the rows mix
+/// revisions or CPUs (each row's `run` column then names its own), and a warning for runs
+/// from a tree with uncommitted changes.
+pub fn runs_note(ctx: &Ctx) -> String {
+    let json = std::fs::read_to_string(ctx.path("machine.json")).unwrap_or_default();
+    let runs: Vec<_> = HEADLINE_EXPERIMENTS
+        .iter()
+        .filter_map(|name| crate::machine_keys::run_of(&json, name))
+        .collect();
+    let mut distinct: Vec<(&str, Option<&str>)> = Vec::new();
+    for r in &runs {
+        let key = (r.git_rev.as_str(), r.cpu.as_deref());
+        if !distinct.contains(&key) {
+            distinct.push(key);
+        }
+    }
+    let unrecorded = HEADLINE_EXPERIMENTS.len() - runs.len();
+    let mut note = match (distinct.len(), unrecorded) {
+        (0, _) => "No run of these rows is recorded in `machine.json`.".to_owned(),
+        (1, 0) => format!("Every row from one run: {}.", runs[0].label()),
+        (n, u) => format!(
+            "**The rows do not come from one run**: {n} recorded run{}{} (the `run` column \
+             names each row's). Compare rows with care, or regenerate them in one \
+             `scripts/reproduce.sh`.",
+            if n == 1 { "" } else { "s" },
+            if u == 0 {
+                String::new()
+            } else {
+                format!(
+                    " and {u} row{} from before runs were recorded",
+                    if u == 1 { "" } else { "s" }
+                )
+            }
+        ),
+    };
+    if runs.iter().any(|r| r.dirty()) {
+        note.push_str(
+            " Rows from a tree with uncommitted changes cannot be reproduced from a revision.",
+        );
+    }
+    note
 }
 
 /// One headline row: what is compared, the paper's figures, ours (`None`: no CSV), the CSV.
@@ -579,6 +630,77 @@ mod tests {
             md.contains("Measured on another host: accel on Other CPU"),
             "{md}"
         );
+    }
+
+    /// `folder`'s machine.json with `runs` set to one entry per headline experiment, the
+    /// revision of each given.
+    fn with_runs(ctx: &Ctx, revs: [&str; 5]) {
+        let text = std::fs::read_to_string(ctx.path("machine.json")).unwrap();
+        let runs: Vec<String> = HEADLINE_EXPERIMENTS
+            .iter()
+            .zip(revs)
+            .map(|(name, rev)| {
+                format!(r#""{name}": {{"git_rev": "{rev}", "date": "2026-11-29T08:00:00Z", "cpu": "Test CPU 9000"}}"#)
+            })
+            .collect();
+        let json = crate::machine_keys::set_key(&text, "runs", &format!("{{{}}}", runs.join(", ")));
+        write(ctx, "machine.json", &json);
+    }
+
+    #[test]
+    fn each_row_names_its_run_and_a_mixed_table_says_so() {
+        let dir = tempfile::tempdir().unwrap();
+        let ctx = Ctx::new(dir.path(), true, Machine::detect());
+        folder(&ctx);
+        let one = "0123456789abcdef";
+        with_runs(&ctx, [one; 5]);
+        let md = render(&ctx, crate::EXPERIMENTS);
+        assert!(
+            md.contains("Every row from one run: `0123456` on Test CPU 9000, 2026-11-29."),
+            "{md}"
+        );
+        assert_eq!(
+            md.matches("| `0123456` on Test CPU 9000, 2026-11-29 |")
+                .count(),
+            5,
+            "{md}"
+        );
+        assert!(!md.contains("do not come from one run"), "{md}");
+        // One row from another revision, one from an uncommitted tree.
+        with_runs(
+            &ctx,
+            [one, one, "fedcba9876543210", one, "0123456789abcdef-dirty"],
+        );
+        let md = render(&ctx, crate::EXPERIMENTS);
+        assert!(
+            md.contains("**The rows do not come from one run**: 3 recorded runs"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| `fedcba9` on Test CPU 9000, 2026-11-29 |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("`0123456` (**a tree with uncommitted changes**)"),
+            "{md}"
+        );
+        assert!(md.contains("cannot be reproduced from a revision"), "{md}");
+        // Rows with no record are counted as such.
+        let md = {
+            let text = std::fs::read_to_string(ctx.path("machine.json")).unwrap();
+            let json = crate::machine_keys::set_key(
+                &text,
+                "runs",
+                &format!(r#"{{"table1": {{"git_rev": "{one}", "date": "d", "cpu": "C"}}}}"#),
+            );
+            write(&ctx, "machine.json", &json);
+            render(&ctx, crate::EXPERIMENTS)
+        };
+        assert!(
+            md.contains("1 recorded run and 4 rows from before runs were recorded"),
+            "{md}"
+        );
+        assert_eq!(md.matches("| not recorded |").count(), 4, "{md}");
     }
 
     #[test]

@@ -149,6 +149,33 @@ pub fn record_run(json: &str, experiment: &str, machine: &Machine, probe_ms: f64
     set_key(json, "runs", &serde_json::Value::Object(runs).to_string())
 }
 
+impl RunRecord {
+    /// Whether the run was built from a tree with uncommitted changes.
+    pub fn dirty(&self) -> bool {
+        self.git_rev.ends_with("-dirty")
+    }
+
+    /// What a reader needs to place the run: `` `639ea2c` on Intel Xeon, 2026-11-28 ``, with
+    /// a warning for an uncommitted tree.
+    pub fn label(&self) -> String {
+        let rev = self.git_rev.trim_end_matches("-dirty");
+        let rev = rev.get(..7).unwrap_or(rev);
+        let cpu = self.cpu.as_deref().unwrap_or("a CPU not recorded");
+        let day = self.date.get(..10).unwrap_or(&self.date);
+        let dirty = if self.dirty() {
+            " (**a tree with uncommitted changes**)"
+        } else {
+            ""
+        };
+        format!("`{rev}`{dirty} on {cpu}, {day}")
+    }
+}
+
+/// The run that wrote `experiment`'s results in the `machine.json` text `json`, if recorded.
+pub fn run_of(json: &str, experiment: &str) -> Option<RunRecord> {
+    runs(json).into_iter().find(|r| r.experiment == experiment)
+}
+
 /// `runs` of `json`, by experiment name; empty without it.
 pub fn runs(json: &str) -> Vec<RunRecord> {
     let Some(value) = get_key(json, "runs") else {

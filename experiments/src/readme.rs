@@ -61,13 +61,18 @@ pub fn render(ctx: &Ctx, registry: &[Experiment], run: &RunInfo) -> (String, Vec
     md.push_str("## Contents\n\n");
     md.push_str(&contents(ctx, registry));
 
+    let runs_json = std::fs::read_to_string(ctx.path("machine.json")).unwrap_or_default();
     for experiment in registry {
         md.push_str(&format!(
             "## {} — {}\n\n",
             experiment.name, experiment.description
         ));
         md.push_str(&format!("Paper: {}. ", experiment.paper));
-        md.push_str(&format!("Command: `{}`.\n\n", experiment.command()));
+        md.push_str(&format!("Command: `{}`.", experiment.command()));
+        if let Some(run) = crate::machine_keys::run_of(&runs_json, experiment.name) {
+            md.push_str(&format!(" Run: {}.", run.label()));
+        }
+        md.push_str("\n\n");
         match experiment.status {
             Status::Planned { .. } => {
                 let why = experiment.planned_text().unwrap_or_default();
@@ -355,6 +360,15 @@ mod tests {
         assert!(md.contains("![speedup](plots/demo.png)"), "{md}");
         assert!(md.contains("`reproduce --quick`, which ran: demo."), "{md}");
         assert!(md.contains("[demo](#demo--a-demonstration)"), "{md}");
+        // The section names the run behind it once one is recorded.
+        assert!(!md.contains(" Run: `"), "{md}");
+        let json = std::fs::read_to_string(ctx.path("machine.json")).unwrap();
+        let json = crate::machine_keys::record_run(&json, "demo", &ctx.machine, 1.0);
+        std::fs::write(ctx.path("machine.json"), json).unwrap();
+        let (md, _) = render(&ctx, &registry, &info);
+        let rev = ctx.machine.git_rev.trim_end_matches("-dirty");
+        let rev = rev.get(..7).unwrap_or(rev);
+        assert!(md.contains(&format!("Run: `{rev}`")), "{md}");
         assert!(dir.path().join("plots/demo.png").is_file());
         assert!(dir.path().join("plots/demo.svg").is_file());
 

@@ -17,14 +17,10 @@ pub const END: &str = "<!-- /headline -->";
 /// repository's `results/`; returns the README's path when it did. A README without the
 /// markers is left as it is.
 pub fn update(ctx: &Ctx, registry: &[Experiment]) -> anyhow::Result<Option<PathBuf>> {
-    let Some(root) = Path::new(env!("CARGO_MANIFEST_DIR")).parent() else {
+    let Some(root) = repository_root() else {
         return Ok(None);
     };
-    let (Ok(out), Ok(results)) = (ctx.out.canonicalize(), root.join("results").canonicalize())
-    else {
-        return Ok(None);
-    };
-    if out != results {
+    if !is_repository_results(&ctx.out) {
         return Ok(None);
     }
     let path = root.join("README.md");
@@ -40,6 +36,22 @@ pub fn update(ctx: &Ctx, registry: &[Experiment]) -> anyhow::Result<Option<PathB
     Ok(Some(path))
 }
 
+/// The root of the workspace this binary was built from.
+fn repository_root() -> Option<&'static Path> {
+    Path::new(env!("CARGO_MANIFEST_DIR")).parent()
+}
+
+/// Whether `out` is the repository's own `results/` folder (the one README.md shows).
+pub fn is_repository_results(out: &Path) -> bool {
+    let Some(root) = repository_root() else {
+        return false;
+    };
+    match (out.canonicalize(), root.join("results").canonicalize()) {
+        (Ok(out), Ok(results)) => out == results,
+        _ => false,
+    }
+}
+
 /// The block: the first screen's table with its links made relative to the repository root,
 /// and the machine it was measured on.
 fn block(ctx: &Ctx, registry: &[Experiment]) -> String {
@@ -48,17 +60,10 @@ fn block(ctx: &Ctx, registry: &[Experiment]) -> String {
         .and_then(|t| Machine::from_json(&t).ok());
     let emulated = machine.as_ref().is_some_and(Machine::is_emulated);
     let table = relink(&crate::headline::table(ctx, registry, emulated), "results/");
-    let on = machine.map_or_else(
-        || "(no machine.json)".to_owned(),
-        |m| {
-            let rev = m.git_rev.get(..7).unwrap_or(&m.git_rev);
-            format!("{} ({} cores), revision `{rev}`", m.cpu, m.cores)
-        },
-    );
+    let runs = crate::headline::runs_note(ctx);
     format!(
         "{table}\nSpeedups over our scalar backend in the same run, per lane-backend family; \
-         the paper's over its non-SSE build. From [`results/`](results/README.md), last \
-         written on {on}.\n"
+         the paper's over its non-SSE build. From [`results/`](results/README.md). {runs}\n"
     )
 }
 
