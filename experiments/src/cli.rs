@@ -99,11 +99,11 @@ pub fn main(args: impl IntoIterator<Item = OsString>, registry: &[Experiment]) -
     }
 }
 
-/// Refuses a run into the repository's own `results/` from a revision with uncommitted
-/// changes (`git_rev` ends in `-dirty`) unless `allow` (`--allow-dirty`); other folders take
-/// any run.
+/// Refuses a run into the repository's own `results/` (or a folder in it) from a revision
+/// with uncommitted changes (`git_rev` ends in `-dirty`) unless `allow` (`--allow-dirty`);
+/// other folders take any run.
 fn refuse_dirty(out: &Path, git_rev: &str, allow: bool) -> anyhow::Result<()> {
-    if git_rev.ends_with("-dirty") && !allow && crate::root_readme::is_repository_results(out) {
+    if git_rev.ends_with("-dirty") && !allow && crate::root_readme::is_in_repository_results(out) {
         bail!(
             "refusing to write {} from a tree with uncommitted changes (revision {git_rev}): \
              commit them first, write elsewhere with --out DIR, or pass --allow-dirty (the \
@@ -273,6 +273,8 @@ mod tests {
         // Allowed when asked, from a committed tree, and into any other folder.
         refuse_dirty(&results, "0123abc-dirty", true).unwrap();
         refuse_dirty(&results, "0123abc", false).unwrap();
+        // Folders inside it are published too.
+        assert!(refuse_dirty(&results.join("manycore"), "0123abc-dirty", false).is_err());
         let elsewhere = tempfile::tempdir().unwrap();
         refuse_dirty(elsewhere.path(), "0123abc-dirty", false).unwrap();
     }

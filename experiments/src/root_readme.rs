@@ -43,13 +43,19 @@ fn repository_root() -> Option<&'static Path> {
 
 /// Whether `out` is the repository's own `results/` folder (the one README.md shows).
 pub fn is_repository_results(out: &Path) -> bool {
-    let Some(root) = repository_root() else {
-        return false;
-    };
-    match (out.canonicalize(), root.join("results").canonicalize()) {
-        (Ok(out), Ok(results)) => out == results,
-        _ => false,
-    }
+    repository_results(out).is_some_and(|(out, results)| out == results)
+}
+
+/// Whether `out` is the repository's `results/` or a folder inside it (`results/native/`,
+/// `results/manycore/`): what the repository publishes.
+pub fn is_in_repository_results(out: &Path) -> bool {
+    repository_results(out).is_some_and(|(out, results)| out.starts_with(results))
+}
+
+/// `out` and the repository's `results/`, both canonical, when both exist.
+fn repository_results(out: &Path) -> Option<(PathBuf, PathBuf)> {
+    let results = repository_root()?.join("results").canonicalize().ok()?;
+    Some((out.canonicalize().ok()?, results))
 }
 
 /// The block: the first screen's table with its links made relative to the repository root,
