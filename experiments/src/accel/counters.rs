@@ -76,6 +76,8 @@ pub(super) fn rows(trav: &mut CsvOut, k: &KindRun, others: &[Other]) -> anyhow::
             &"-",
             &"-",
             &"-",
+            &"-",
+            &"-",
         ])?;
     }
     // The beams' counters: inner nodes count the groups' steps with the packets' (a beam of
@@ -108,6 +110,8 @@ pub(super) fn rows(trav: &mut CsvOut, k: &KindRun, others: &[Other]) -> anyhow::
             &format!("{:.2}", c.beam_setup_ns as f64 / n),
             &c.beam_fallback_lanes,
             &c.beam_mixed_lanes,
+            &format!("{:.3}", c.tris_culled as f64 / n),
+            &c.beam_reversed_lanes,
         ])?;
     }
     Ok(())

@@ -179,10 +179,15 @@ const TRAVERSAL_HEADER: &[&str] = &[
     "setup_ns_per_ray",
     "ray_by_ray_lanes",
     "other_sign_lanes",
+    "culled_per_ray",
+    "reversed_lanes",
 ];
 
-/// The trailing columns of [`TRAVERSAL_HEADER`] older files lack (the beams' own counters).
-const TRAVERSAL_BEAM_COLUMNS: usize = 7;
+/// The trailing columns of [`TRAVERSAL_HEADER`] older files lack (the beams' own counters,
+/// the last [`TRAVERSAL_CULL_COLUMNS`] of them added later).
+const TRAVERSAL_BEAM_COLUMNS: usize = 9;
+/// The beams' culling and reversal counters, the last columns of [`TRAVERSAL_HEADER`].
+const TRAVERSAL_CULL_COLUMNS: usize = 2;
 
 fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     let setup = Setup::new(ctx);

@@ -598,7 +598,7 @@ pub(super) fn read_either(
     // `backend` columns (and the cross-check's).
     const B: usize = super::TRAVERSAL_BEAM_COLUMNS;
     let older: &[usize] = if file.ends_with("traversal.csv") {
-        &[B, B + 2, B + 3, B + 4]
+        &[super::TRAVERSAL_CULL_COLUMNS, B, B + 2, B + 3, B + 4]
     } else {
         &[2, 4]
     };
