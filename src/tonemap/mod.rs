@@ -7,11 +7,25 @@
 //! is not given. [`Operator::Tumblin`] stands in for it: Tumblin and Rushmeier's 1993
 //! operator has exactly the ingredients the paper names (a log-average adaptation
 //! luminance and one power per pixel with an exponent shared by the image). Reinhard et
-//! al. 2002 (global, key 0.18, white point = pre-render maximum) and Ward 1994 (a
+//! al. 2002 (global, key 0.18, white point from the pre-render maximum) and Ward 1994 (a
 //! contrast-based scale factor) are offered for comparison.
 //!
 //! Luminance is Rec. 709 luminance of the radiance, read as cd/m^2. Colours keep their
 //! chromaticity: every channel is scaled by `L_display / L`.
+//!
+//! Every operator shows a uniform scene as a mid grey, whatever its scale: the log average
+//! lands at `1/sqrt(C_max) - 1/C_max` (Tumblin, 0.139), [`MID_GREY`] (Reinhard, 0.18) or
+//! 0.232 (Ward, world at 50 cd/m^2), all with the display defaults.
+//!
+//! Why the default operator showed lit scenes black: Tumblin and Rushmeier's cd/m^2 `alpha`
+//! and `beta` take `x = log10 L_a + 0.84`, and `beta(x) + alpha(x) (x - 0.84) = -0.432` for
+//! every `x`, so with the offset on both sides the curve is `L_da (L / L_avg)^y`: the
+//! world's log average shows at the display adaptation `L_da`. The offset was on the world
+//! side only, which showed the log average at `L_da / 10^0.84 = 1.93` cd/m^2, under the
+//! display's black level `L_dmax / C_max = 2.22`: display value 0 at every world scale, for
+//! everything up to 1.1 times the log average. Reinhard's white point (the pre-render
+//! maximum) showed a uniform scene all white; Ward's display adaptation `L_dmax / 2` showed
+//! the log average at 0.52 and clipped anything 1.9 times brighter.
 
 // Per-packet code uses index loops over lanes (see docs/architecture.md#inlining).
 #![allow(clippy::needless_range_loop)]
@@ -75,9 +89,18 @@ pub struct Display {
     pub c_max: f32,
     /// `Some(t)`: radiance is scaled so that the pre-render's log average is `t` cd/m^2 (an
     /// exposure: renderers' radiance units are arbitrary, and Tumblin-Rushmeier and Ward
-    /// are absolute operators that show a scene of 1 cd/m^2 as nearly black). `None`:
-    /// radiance is read as cd/m^2.
+    /// are absolute operators: Ward shows a scene of 1 cd/m^2 at 0.06, and the level sets
+    /// Tumblin-Rushmeier's contrast exponent). `None`: radiance is read as cd/m^2.
     pub world_log_average: Option<f32>,
+}
+
+impl Display {
+    /// The luminance (cd/m^2) the viewer of the display is adapted to, `L_dmax / sqrt(C_max)`
+    /// (Tumblin and Rushmeier's choice), for both absolute operators: Tumblin-Rushmeier
+    /// shows the world's log average at this luminance.
+    pub fn adaptation(&self) -> f64 {
+        self.l_dmax as f64 / (self.c_max as f64).sqrt()
+    }
 }
 
 impl Default for Display {
@@ -92,34 +115,46 @@ impl Default for Display {
     }
 }
 
+/// Reinhard's key: the display value of the log average, 18% grey (CIE lightness 49.5).
+pub const MID_GREY: f32 = 0.18;
+
+/// Tumblin and Rushmeier's adaptation offset: their `alpha` and `beta` take
+/// `log10 L_a + 0.84` on the world and the display side alike.
+const TR_OFFSET: f64 = 0.84;
+
 /// What the operators need from the pre-render.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Adaptation {
-    /// `exp(mean(ln(delta + L)))` over the pre-render.
+    /// `exp(mean(ln(delta + L)))` over the pre-render's lit points (`L > 0`),
+    /// `delta = DELTA * max`.
     pub log_average: f32,
     /// Largest luminance of the pre-render.
     pub max: f32,
 }
 
 impl Adaptation {
-    /// `delta` of the log average (keeps black pixels finite).
+    /// `delta` of the log average relative to the maximum: bounds how far one near-black
+    /// point pulls it down, and keeps the log average proportional to the radiance's scale
+    /// (an absolute `delta` raised the log average of dim scenes, whatever their unit).
     pub const DELTA: f64 = 1e-6;
 
-    /// From luminances (non-finite and negative values are skipped). An empty or black
-    /// set gives `max = 0`, which maps everything to black.
+    /// From luminances (non-finite and negative values are skipped). Black points (rays
+    /// that left the scene, unlit surfaces) are left out of the log average: with `delta`
+    /// each pulled it down by up to `ln(1e-6)`, so a frame with much background (41% of
+    /// `cornell`) showed its lit room white. An empty or black set gives `max = 0`, which
+    /// maps everything to black.
     pub fn from_luminances(ls: impl IntoIterator<Item = f32>) -> Adaptation {
-        let (mut sum, mut n, mut max) = (0.0f64, 0u64, 0.0f32);
-        for l in ls {
-            if l.is_finite() && l >= 0.0 {
-                sum += (Self::DELTA + l as f64).ln();
-                n += 1;
-                max = max.max(l);
-            }
-        }
-        let log_average = if n == 0 {
+        let lit: Vec<f32> = ls
+            .into_iter()
+            .filter(|l| l.is_finite() && *l > 0.0)
+            .collect();
+        let max = lit.iter().fold(0.0f32, |m, &l| m.max(l));
+        let delta = Self::DELTA * max as f64;
+        let sum: f64 = lit.iter().map(|&l| (delta + l as f64).ln()).sum();
+        let log_average = if lit.is_empty() {
             0.0
         } else {
-            (sum / n as f64).exp() as f32
+            (sum / lit.len() as f64).exp() as f32
         };
         Adaptation { log_average, max }
     }
@@ -171,15 +206,14 @@ impl ToneMap {
         };
         let lavg = a.log_average as f64 * k;
         let max = a.max as f64;
+        let l_da = d.adaptation();
         match op {
             Operator::Tumblin => {
-                // log10 L_rw = log10 L_avg + 0.84; display adaptation L_da = L_dmax / sqrt(C_max).
-                // Checked against a second implementation, tizian/tonemapper's
-                // TumblinRushmeierOperator: same alpha, beta, final formula and defaults
-                // (80, 36); it also adds 0.84 to log10 L_da, which the 1993 form used here
-                // does on the world side only (an offset of the display curve, not of its shape).
-                let x_rw = lavg.log10() + 0.84;
-                let x_d = (d.l_dmax as f64 / (d.c_max as f64).sqrt()).log10();
+                // The offset on both sides, as in tizian/tonemapper's TumblinRushmeierOperator
+                // (same alpha, beta, formula and defaults 80, 36): then the curve is
+                // `L_da (L / L_avg)^y`, the log average shown at L_da (see the module docs).
+                let x_rw = lavg.log10() + TR_OFFSET;
+                let x_d = l_da.log10() + TR_OFFSET;
                 let (a_rw, b_rw) = (tr_alpha(x_rw), tr_beta(x_rw));
                 let (a_d, b_d) = (tr_alpha(x_d), tr_beta(x_d));
                 let y = a_rw / a_d;
@@ -193,15 +227,22 @@ impl ToneMap {
                 }
             }
             Operator::Reinhard => {
-                // Relative: the world scale k cancels.
-                let key = 0.18;
+                // Relative: the world scale k cancels. The white point is the scaled maximum,
+                // but at least 1: a white point below 1 shows every luminance brighter than
+                // linear exposure does (a uniform image all white), at 1 the curve is linear
+                // (`s (1 + s) / (1 + s) = s`), so an image that fits under the key's linear
+                // exposure is shown linearly, its log average at the key.
+                let key = MID_GREY as f64;
                 let lavg = a.log_average as f64;
                 t.scale = (key / lavg) as f32;
-                let white = key / lavg * max;
+                let white = (key / lavg * max).max(1.0);
                 t.offset = (1.0 / (white * white)) as f32;
             }
             Operator::Ward => {
-                let num = 1.219 + (d.l_dmax as f64 / 2.0).powf(0.4);
+                // Ward's L_dmax / 2 for the display adaptation (a viewer adapted to a half-white
+                // screen) showed the log average at 0.52 and clipped everything 1.9 times
+                // brighter; the display's own adaptation puts it near mid grey.
+                let num = 1.219 + l_da.powf(0.4);
                 let den = 1.219 + lavg.powf(0.4);
                 t.scale = (k * (num / den).powf(2.5) / d.l_dmax as f64) as f32;
             }
