@@ -113,7 +113,8 @@ struct RenderArgs {
     /// Reflection/refraction depth (default: the scene's; 0 = camera rays only).
     #[arg(long)]
     depth: Option<u32>,
-    /// Tone-mapping operator for PNG output: tumblin, reinhard, ward.
+    /// Tone-mapping operator for PNG output: tumblin, reinhard, ward (default: the scene
+    /// file's `tonemap`, else tumblin).
     #[arg(long)]
     tonemap: Option<String>,
     /// Light sample points and environment directions: `pixel` (each sample draws its own)

@@ -260,3 +260,58 @@ fn an_error_says_each_cause_once() {
     assert!(!out.status.success());
     assert_eq!(said.matches("(os error 2)").count(), 1, "{said}");
 }
+
+#[test]
+fn the_scene_files_tone_map_is_used_unless_the_command_line_names_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("lit.toml");
+    std::fs::write(
+        &scene,
+        r#"name = "lit"
+tonemap = "reinhard"
+
+[camera]
+position = [0.0, 1.0, 4.0]
+look_at = [0.0, 0.0, 0.0]
+vfov_deg = 45
+
+[materials.grey]
+type = "phong"
+diffuse = [0.5, 0.5, 0.5]
+
+[[objects]]
+shape = "quad"
+material = "grey"
+scale = [4, 1, 4]
+
+[[lights]]
+type = "omni"
+position = [0.0, 2.0, 1.0]
+intensity = [40.0, 40.0, 40.0]
+"#,
+    )
+    .unwrap();
+    let png = |name: &str, extra: &[&str]| {
+        let path = dir.path().join(name);
+        let mut args = vec![
+            "render",
+            scene.to_str().unwrap(),
+            "--resolution",
+            "32x24",
+            "--spp",
+            "1",
+            "--threads",
+            "1",
+            "--quiet",
+            "--out",
+            path.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let out = coherent(&args);
+        assert!(out.status.success(), "{}", text(&out));
+        std::fs::read(path).unwrap()
+    };
+    let from_file = png("file.png", &[]);
+    assert_eq!(from_file, png("reinhard.png", &["--tonemap", "reinhard"]));
+    assert_ne!(from_file, png("tumblin.png", &["--tonemap", "tumblin"]));
+}

@@ -120,9 +120,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let (w, h) = (scene.width, scene.height);
     let method = film_method(args, &scene);
     let mut opts = FilmOptions::new(w, h, method);
-    if let Some(op) = &args.tonemap {
-        opts.tonemap = op.parse().map_err(|e| anyhow::anyhow!("--tonemap: {e}"))?;
-    }
+    opts.tonemap = match &args.tonemap {
+        Some(op) => op.parse().map_err(|e| anyhow::anyhow!("--tonemap: {e}"))?,
+        None => scene.tonemap,
+    };
     opts.validate()?;
 
     let t_build = Instant::now();

@@ -437,6 +437,13 @@ intensity = [10, 10, 10]
             assert!(md.contains("frame / lanes, %"), "{md}");
         }
         assert!(md.contains("images/table3_ball.png"), "{md}");
+        // The image's use of the display, read back from the PNG: lit, not black.
+        let line = md
+            .lines()
+            .find(|l| l.starts_with("| ball | 0."))
+            .unwrap_or_else(|| panic!("no exposure row for ball: {md}"));
+        let mean: f64 = line.split('|').nth(2).unwrap().trim().parse().unwrap();
+        assert!(mean > 0.02, "{line}");
         assert!(md.contains("scene broken"), "{md}");
         assert!(ctx.path("images/table3_ball.png").is_file());
     }

@@ -230,6 +230,7 @@ pub(super) fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
         md.push_str("\nThe scalar + BSP images:\n\n");
         md.push_str(&images.join("\n"));
         md.push('\n');
+        md.push_str(&exposure_md(ctx, &scenes));
     }
     if let Some(sk) = ctx.read_csv(SKIPPED_FILE, SKIPPED_HEADER)?
         && !sk.rows.is_empty()
@@ -566,4 +567,63 @@ fn coherence_md(ctx: &Ctx, c: &Table) -> anyhow::Result<String> {
         md.push_str(&p);
     }
     Ok(md)
+}
+
+/// How each scene's image uses the display's range: the mean and 99th percentile of its
+/// display values (Rec. 709 weights over the PNG's stored, display-encoded channels, 0-1)
+/// and its share of black pixels, read from the images themselves.
+fn exposure_md(ctx: &Ctx, scenes: &[String]) -> String {
+    let mut rows = Vec::new();
+    for s in scenes {
+        let path = ctx.path(&format!("images/table3_{s}.png"));
+        if !path.is_file() {
+            continue;
+        }
+        rows.push(match display_values(&path) {
+            Ok(v) => {
+                let n = v.len().max(1) as f64;
+                let mean = v.iter().sum::<f64>() / n;
+                let black = v.iter().filter(|&&x| x == 0.0).count() as f64 / n;
+                vec![
+                    s.clone(),
+                    format!("{mean:.3}"),
+                    format!(
+                        "{:.3}",
+                        v[((v.len() as f64 * 0.99) as usize).min(v.len() - 1)]
+                    ),
+                    format!("{:.1}%", 100.0 * black),
+                ]
+            }
+            Err(e) => vec![
+                s.clone(),
+                format!("cannot read: {e:#}"),
+                "-".into(),
+                "-".into(),
+            ],
+        });
+    }
+    if rows.is_empty() {
+        return String::new();
+    }
+    format!(
+        "\nHow the images use the display (default tone mapping; display values 0-1 of the PNGs \
+         above, Rec. 709 weights over their stored channels):\n\n{}",
+        markdown_table(&["scene", "mean", "99th percentile", "black pixels"], &rows)
+    )
+}
+
+/// The display values of an image file, sorted (never empty).
+fn display_values(path: &std::path::Path) -> anyhow::Result<Vec<f64>> {
+    let img = image::open(path)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?
+        .to_rgb8();
+    let mut v: Vec<f64> = img
+        .pixels()
+        .map(|p| (0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64) / 255.0)
+        .collect();
+    if v.is_empty() {
+        anyhow::bail!("{}: an empty image", path.display());
+    }
+    v.sort_by(f64::total_cmp);
+    Ok(v)
 }
