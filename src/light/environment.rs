@@ -34,6 +34,9 @@ use super::sincos::sincos;
 use super::{LightError, LightSample, check_dir, check_samples, finish};
 use crate::approx::{acos, atan2};
 
+/// A map has fewer texels than this.
+pub const MAX_TEXELS: usize = 1 << 24;
+
 /// Default samples per shading point.
 pub const DEFAULT_SAMPLES: u32 = 16;
 
@@ -153,7 +156,7 @@ impl Environment {
                 texels.len()
             )));
         }
-        if width * height >= 1 << 24 {
+        if width * height >= MAX_TEXELS {
             return Err(file(format!("{width} x {height} map: at most 2^24 texels")));
         }
         if let Some((k, t)) = texels
@@ -260,7 +263,23 @@ impl Environment {
         forward: Vec3,
         samples: u32,
     ) -> Result<Self, LightError> {
-        let (width, height, mut texels) = read_exr(path)?;
+        let bytes = std::fs::read(path).map_err(|source| LightError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_bytes(path, &bytes, scale, up, forward, samples)
+    }
+
+    /// [`Environment::load`] on the file's bytes, as if read from `path` (which errors name).
+    pub fn from_bytes(
+        path: &Path,
+        bytes: &[u8],
+        scale: f32,
+        up: Vec3,
+        forward: Vec3,
+        samples: u32,
+    ) -> Result<Self, LightError> {
+        let (width, height, mut texels) = decode_exr(path, bytes)?;
         let mut clamped = 0;
         for t in &mut texels {
             for c in t.iter_mut() {
@@ -467,11 +486,30 @@ impl Environment {
 /// Reads the first RGB layer of an OpenEXR file. DWAA/DWAB files are read too (the `exr`
 /// crate decodes them since 1.74).
 pub fn read_exr(path: &Path) -> Result<(usize, usize, Vec<[f32; 3]>), LightError> {
+    let bytes = std::fs::read(path).map_err(|source| LightError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    decode_exr(path, &bytes)
+}
+
+/// [`read_exr`] on the file's bytes, as if read from `path` (which errors name).
+pub fn decode_exr(path: &Path, bytes: &[u8]) -> Result<(usize, usize, Vec<[f32; 3]>), LightError> {
     use exr::prelude::*;
     let file = |problem: String| LightError::File {
         path: path.to_path_buf(),
         problem,
     };
+    let unusable = |e: exr::error::Error| file(format!("not a usable OpenEXR RGB map: {e}"));
+    // Refused from the headers, before the decoder allocates the texels they claim.
+    let sizes = crate::texture::load::exr_layer_sizes(bytes).map_err(unusable)?;
+    if let Some((w, h)) = sizes
+        .into_iter()
+        .find(|&(w, h)| w.saturating_mul(h) >= MAX_TEXELS)
+    {
+        return Err(file(format!("{w} x {h} map: at most 2^24 texels")));
+    }
+    crate::texture::load::check_exr_dwa_blocks(bytes).map_err(unusable)?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -487,14 +525,8 @@ pub fn read_exr(path: &Path) -> Result<(usize, usize, Vec<[f32; 3]>), LightError
         )
         .first_valid_layer()
         .all_attributes()
-        .from_file(path)
-        .map_err(|e| match e {
-            exr::error::Error::Io(io) => LightError::Io {
-                path: path.to_path_buf(),
-                source: io,
-            },
-            other => file(format!("not a usable OpenEXR RGB map: {other}")),
-        })?;
+        .from_buffered(std::io::Cursor::new(bytes))
+        .map_err(unusable)?;
     let (width, height, texels) = image.layer_data.channel_data.pixels;
     Ok((width, height, texels))
 }

@@ -26,6 +26,25 @@ use super::{LightError, LightSample, check_colour, check_dir, check_point, finis
 use crate::approx::{acos, atan2};
 use crate::tabulated::{Axis, Cell, Grid};
 
+/// The table of an IES (`.ies`) or EULUMDAT (`.ldt`) file's bytes, by `path`'s extension
+/// (any case); errors name `path`. Neither format's text fields are used, so any 8-bit
+/// encoding is read.
+pub fn parse_table(path: &std::path::Path, bytes: &[u8]) -> Result<PhotometricTable, LightError> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let text = String::from_utf8_lossy(bytes);
+    match ext.as_deref() {
+        Some("ies") => super::ies::parse(&text, path),
+        Some("ldt") => super::ldt::parse(&text, path),
+        _ => Err(LightError::File {
+            path: path.to_path_buf(),
+            problem: "not a goniodiagram file: expected the extension .ies (IES LM-63) or .ldt (EULUMDAT)".to_owned(),
+        }),
+    }
+}
+
 /// How a lane's table cell is found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum GonioLookup {
@@ -131,20 +150,11 @@ impl Goniodiagram {
         colour: [f32; 3],
         lookup: GonioLookup,
     ) -> Result<Self, LightError> {
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase);
-        let table = match ext.as_deref() {
-            Some("ies") => super::ies::load(path)?,
-            Some("ldt") => super::ldt::load(path)?,
-            _ => {
-                return Err(LightError::File {
-                    path: path.to_path_buf(),
-                    problem: "not a goniodiagram file: expected the extension .ies (IES LM-63) or .ldt (EULUMDAT)".to_owned(),
-                });
-            }
-        };
+        let bytes = std::fs::read(path).map_err(|source| LightError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let table = parse_table(path, &bytes)?;
         Goniodiagram::new(position, up, x, &table, colour, lookup, path)
     }
 

@@ -8,9 +8,9 @@ mod obj;
 mod off;
 mod ply;
 
-pub use obj::read_obj;
+pub use obj::{parse_obj, read_obj};
 pub use off::parse_off;
-pub use ply::read_ply;
+pub use ply::{parse_ply, read_ply};
 
 use std::path::{Path, PathBuf};
 
@@ -39,6 +39,7 @@ pub enum MeshFileError {
     Invalid { path: PathBuf, problem: String },
     #[error("{path}: unknown mesh format (expected .obj, .ply or .off)")]
     Format { path: PathBuf },
+    /// `path` is the mesh file; the texture error names the texture.
     #[error("{path}: {source}")]
     Texture {
         path: PathBuf,
@@ -159,20 +160,26 @@ pub fn default_material() -> Material {
 /// the mesh (indices in range, finite positions and normals; errors name the file). Skipped
 /// elements are reported on stderr as a warning.
 pub fn load_shaded(path: &Path) -> Result<MeshFile, MeshFileError> {
+    let bytes = std::fs::read(path).map_err(|source| MeshFileError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_shaded(path, &bytes)
+}
+
+/// [`load_shaded`] on the file's bytes, as if read from `path` (its extension picks the
+/// format, its folder holds an OBJ's MTL files, and errors name it).
+pub fn parse_shaded(path: &Path, bytes: &[u8]) -> Result<MeshFile, MeshFileError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     let file = match ext.as_deref() {
-        Some("obj") => read_obj(path)?,
-        Some("ply") => read_ply(path)?,
+        Some("obj") => parse_obj(path, text(path, bytes)?)?,
+        Some("ply") => parse_ply(path, bytes)?,
         Some("off") => {
-            let text = std::fs::read_to_string(path).map_err(|source| MeshFileError::Io {
-                path: path.to_path_buf(),
-                source,
-            })?;
             let (positions, indices) =
-                parse_off(&text).map_err(|(line, problem)| MeshFileError::Parse {
+                parse_off(text(path, bytes)?).map_err(|(line, problem)| MeshFileError::Parse {
                     path: path.to_path_buf(),
                     line,
                     problem,
@@ -222,6 +229,14 @@ pub fn load_shaded(path: &Path) -> Result<MeshFile, MeshFileError> {
 /// Reads the positions and triangles of an OBJ, PLY or OFF file (see [`load_shaded`]).
 pub fn load(path: &Path) -> Result<Mesh, MeshFileError> {
     load_shaded(path).map(|f| f.mesh.mesh)
+}
+
+/// A text format's bytes as text; an error naming the file when they are not UTF-8.
+fn text<'a>(path: &Path, bytes: &'a [u8]) -> Result<&'a str, MeshFileError> {
+    std::str::from_utf8(bytes).map_err(|e| MeshFileError::Invalid {
+        path: path.to_path_buf(),
+        problem: format!("not UTF-8 text: {e}"),
+    })
 }
 
 /// The file name without its extension: the mesh's name.

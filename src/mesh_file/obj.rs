@@ -3,6 +3,7 @@
 //! `Ka`, mirrors `illum 3`, glass `illum 4/6/7` or `d < 1` with `Ni`, `map_Kd` textures).
 //! Points, lines and faces of fewer than three vertices are skipped and counted.
 
+use std::collections::HashMap;
 use std::io::Cursor;
 use std::path::Path;
 use std::sync::Arc;
@@ -23,6 +24,12 @@ pub fn read_obj(path: &Path) -> Result<MeshFile, MeshFileError> {
         path: path.to_path_buf(),
         source,
     })?;
+    parse_obj(path, &text)
+}
+
+/// [`read_obj`] on the file's text, as if read from `path` (the MTL files it names are read
+/// from `path`'s folder).
+pub fn parse_obj(path: &Path, text: &str) -> Result<MeshFile, MeshFileError> {
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     let opts = tobj::LoadOptions {
         single_index: true,
@@ -30,8 +37,18 @@ pub fn read_obj(path: &Path) -> Result<MeshFile, MeshFileError> {
         ignore_points: true,
         ignore_lines: true,
     };
+    check_face_indices(text).map_err(|(line, problem)| MeshFileError::Parse {
+        path: path.to_path_buf(),
+        line,
+        problem,
+    })?;
+    // Why an MTL file was refused, in more words than tobj's error has.
+    let mtl_problem = std::cell::RefCell::new(None);
     let (models, mtl) = tobj::load_obj_buf(&mut Cursor::new(text.as_bytes()), &opts, |p| {
-        tobj::load_mtl(dir.join(p))
+        read_mtl(&dir.join(p)).map_err(|(e, problem)| {
+            *mtl_problem.borrow_mut() = Some(problem);
+            e
+        })
     })
     .map_err(|e| MeshFileError::Invalid {
         path: path.to_path_buf(),
@@ -39,21 +56,103 @@ pub fn read_obj(path: &Path) -> Result<MeshFile, MeshFileError> {
     })?;
     let mtl = mtl.unwrap_or_else(|e| {
         eprintln!(
-            "warning: {}: cannot read its MTL file ({e}); using the default material",
-            path.display()
+            "warning: {}: cannot read its MTL file ({}); using the default material",
+            path.display(),
+            mtl_problem.take().unwrap_or_else(|| e.to_string())
         );
         Vec::new()
     });
     let mut materials = mtl
         .iter()
-        .map(|m| material(m, &dir))
+        .map(|m| material(m, path, &dir))
         .collect::<Result<Vec<_>, _>>()?;
     let default = materials.len() as u32;
     materials.push(default_material());
     let mut file = assemble(stem(path), &models, default);
-    file.skipped = count_skipped(&text);
+    file.skipped = count_skipped(text);
     file.materials = materials;
     Ok(file)
+}
+
+/// Face (`f`, `l`) vertex indices that refer before the first element of their kind or past
+/// the last, for the kinds the file has. tobj turns such an index into a huge `usize` and
+/// multiplies it, which overflows (a panic in builds with overflow checks, a wrong index
+/// otherwise), so they are refused here first with the line.
+fn check_face_indices(text: &str) -> Result<(), (usize, String)> {
+    const KINDS: [&str; 3] = ["vertex", "texture coordinate", "normal"];
+    let kind = |word: Option<&str>| ["v", "vt", "vn"].iter().position(|k| word == Some(*k));
+    let mut total = [0i64; 3];
+    for l in text.lines() {
+        if let Some(k) = kind(l.split_whitespace().next()) {
+            total[k] += 1;
+        }
+    }
+    let mut before = [0i64; 3];
+    for (n, l) in text.lines().enumerate() {
+        let mut words = l.split_whitespace();
+        let first = words.next();
+        if let Some(k) = kind(first) {
+            before[k] += 1;
+            continue;
+        }
+        if !matches!(first, Some("f" | "l")) {
+            continue;
+        }
+        for word in words {
+            for (k, index) in word.split('/').take(3).enumerate() {
+                // Not a number: tobj reports it.
+                let Ok(i) = index.parse::<i64>() else {
+                    continue;
+                };
+                let (count, which) = if i < 0 {
+                    (before[k], "before this line")
+                } else {
+                    (total[k], "in the file")
+                };
+                // A kind the file lacks is ignored by tobj, whatever the index.
+                if total[k] > 0 && i.unsigned_abs() > count as u64 {
+                    return Err((
+                        n + 1,
+                        format!(
+                            "face index {i} is out of range: {count} {}(s) {which}",
+                            KINDS[k]
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// An MTL file through tobj, or tobj's error and the problem: the file that cannot be
+/// read, or a colour (`Ka`, `Kd`, `Ks`, `Ke`) of fewer than three numbers, which tobj
+/// would panic on.
+#[allow(clippy::type_complexity)]
+fn read_mtl(
+    path: &Path,
+) -> Result<(Vec<tobj::Material>, HashMap<String, usize>), (tobj::LoadError, String)> {
+    let bytes = std::fs::read(path).map_err(|e| {
+        (
+            tobj::LoadError::OpenFileFailed,
+            format!("{}: {e}", path.display()),
+        )
+    })?;
+    for (n, l) in String::from_utf8_lossy(&bytes).lines().enumerate() {
+        let mut words = l.split_whitespace();
+        if let Some(key @ ("Ka" | "Kd" | "Ks" | "Ke")) = words.next()
+            && words.count() < 3
+        {
+            return Err((
+                tobj::LoadError::MaterialParseError,
+                format!("{}:{}: {key} needs three numbers", path.display(), n + 1),
+            ));
+        }
+    }
+    tobj::load_mtl_buf(&mut Cursor::new(bytes)).map_err(|e| {
+        let problem = format!("{}: {e}", path.display());
+        (e, problem)
+    })
 }
 
 /// The models of an OBJ file as one mesh (material ids per triangle; models without a
@@ -137,8 +236,9 @@ fn count_skipped(text: &str) -> usize {
 
 /// An MTL material as ours: `Kd`, `Ks`, `Ns`, `Ka` for the Phong bundle; `illum 3` a mirror
 /// reflecting `Ks`; `illum 4`, `6`, `7` or a dissolve `d < 1` glass of index `Ni` (1.5 when
-/// absent) with Fresnel-weighted reflection and refraction; `map_Kd` the texture.
-fn material(m: &tobj::Material, dir: &Path) -> Result<Material, MeshFileError> {
+/// absent) with Fresnel-weighted reflection and refraction; `map_Kd` the texture. A texture
+/// error names the OBJ file (`obj`) and the texture.
+fn material(m: &tobj::Material, obj: &Path, dir: &Path) -> Result<Material, MeshFileError> {
     let specular = m.specular.unwrap_or([0.0; 3]);
     let mut out = Material::phong(
         &m.name,
@@ -160,8 +260,12 @@ fn material(m: &tobj::Material, dir: &Path) -> Result<Material, MeshFileError> {
     }
     if let Some(tex) = &m.diffuse_texture {
         let p = dir.join(tex);
-        let t = crate::texture::load(&p, Wrap::Repeat, &InverseToneMap::default())
-            .map_err(|source| MeshFileError::Texture { path: p, source })?;
+        let t = crate::texture::load(&p, Wrap::Repeat, &InverseToneMap::default()).map_err(
+            |source| MeshFileError::Texture {
+                path: obj.to_path_buf(),
+                source,
+            },
+        )?;
         out.texture = Some(Arc::new(t));
     }
     Ok(out)
@@ -239,6 +343,46 @@ mod tests {
     }
 
     #[test]
+    fn face_indices_out_of_range_are_errors_with_the_line() {
+        let d = tempfile::tempdir().unwrap();
+        let quad = "v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvn 0 0 1\n";
+        for (face, want) in [
+            ("f 1/1/1 2/1/1 3/1/-2147483649", "face index -2147483649"),
+            ("f 1 2 -4", "face index -4"),
+            ("f 1 2 9223372036854775807", "3 vertex(s) in the file"),
+        ] {
+            let p = write(d.path(), "i.obj", &format!("{quad}{face}\n"));
+            let e = read_obj(&p).unwrap_err().to_string();
+            assert!(e.contains("i.obj:6") && e.contains(want), "{e}");
+        }
+        // An index of a kind the file lacks is ignored, as tobj does.
+        let p = write(
+            d.path(),
+            "t.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/-9 2/-9 3/-9\n",
+        );
+        assert_eq!(read_obj(&p).unwrap().mesh.mesh.indices.len(), 1);
+    }
+
+    #[test]
+    fn a_colour_of_two_numbers_is_a_broken_mtl_file_not_a_panic() {
+        let d = tempfile::tempdir().unwrap();
+        write(d.path(), "c.mtl", "newmtl red\nKd 0.8 0.1\n");
+        let p = write(
+            d.path(),
+            "c.obj",
+            "mtllib c.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n",
+        );
+        let f = read_obj(&p).unwrap();
+        assert_eq!(f.materials.len(), 1, "the default material only");
+        let e = read_mtl(&d.path().join("c.mtl")).unwrap_err().1;
+        assert!(
+            e.contains("c.mtl:2") && e.contains("Kd needs three numbers"),
+            "{e}"
+        );
+    }
+
+    #[test]
     fn broken_files_are_named() {
         let d = tempfile::tempdir().unwrap();
         let p = write(d.path(), "bad.obj", "v 0 0 0\nf 1 2 3\n");
@@ -258,6 +402,6 @@ mod tests {
             "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
         );
         let e = super::super::load(&p).unwrap_err().to_string();
-        assert!(e.contains("missing.png"), "{e}");
+        assert!(e.contains("t.obj") && e.contains("missing.png"), "{e}");
     }
 }

@@ -19,8 +19,13 @@ pub fn read_ply(path: &Path) -> Result<MeshFile, MeshFileError> {
         path: path.to_path_buf(),
         source,
     })?;
+    parse_ply(path, &bytes)
+}
+
+/// [`read_ply`] on the file's bytes, as if read from `path` (which errors name).
+pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<MeshFile, MeshFileError> {
     let ply = Parser::<DefaultElement>::new()
-        .read_ply(&mut bytes.as_slice())
+        .read_ply(&mut &bytes[..])
         .map_err(|e| MeshFileError::Parse {
             path: path.to_path_buf(),
             line: e.line().unwrap_or(0),

@@ -449,11 +449,20 @@ fn missing_file(e: &SceneError) -> Option<PathBuf> {
 
 /// Reads and checks a scene file.
 pub fn load_file(path: &Path) -> Result<RenderScene, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
         path: path.to_path_buf(),
         source,
     })?;
-    parse(path, &text)
+    parse_bytes(path, &bytes)
+}
+
+/// [`parse`] on the file's bytes: text that is not UTF-8 is an error naming the file.
+pub fn parse_bytes(path: &Path, bytes: &[u8]) -> Result<RenderScene, SceneError> {
+    let text = std::str::from_utf8(bytes).map_err(|e| SceneError::Io {
+        path: path.to_path_buf(),
+        source: std::io::Error::new(std::io::ErrorKind::InvalidData, e),
+    })?;
+    parse(path, text)
 }
 
 /// Parses scene-file text as if read from `path` (relative paths resolve from its folder).

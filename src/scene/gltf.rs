@@ -121,9 +121,21 @@ fn uri_bytes(path: &Path, dir: &Path, uri: &str) -> Result<Vec<u8>, SceneError> 
     std::fs::read(&file).map_err(|source| SceneError::Io { path: file, source })
 }
 
-fn read(path: &Path, bytes: &[u8]) -> Result<Loaded, SceneError> {
-    let gltf = gltf::Gltf::from_slice(bytes)
-        .map_err(|e| err(path, format!("not a readable glTF 2.0 file: {e}")))?;
+/// [`read_file`] on the file's bytes, as if read from `path` (buffers and images outside the
+/// file are read from its folder; errors name it).
+pub fn read(path: &Path, bytes: &[u8]) -> Result<Loaded, SceneError> {
+    check_glb_header(path, bytes)?;
+    let unreadable = |e: gltf::Error| err(path, format!("not a readable glTF 2.0 file: {e}"));
+    // Read unvalidated, checked here for what the gltf crate's own validation assumes, then
+    // validated by it.
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::from_slice_without_validation(bytes).map_err(unreadable)?;
+    let json = document.into_json();
+    check_json(path, &json)?;
+    let gltf = gltf::Gltf {
+        document: gltf::Document::from_json(json).map_err(unreadable)?,
+        blob,
+    };
     let dir = path.parent().unwrap_or(Path::new("."));
     let doc = &gltf.document;
     let buffers = buffers(path, dir, &gltf)?;
@@ -161,6 +173,136 @@ fn read(path: &Path, bytes: &[u8]) -> Result<Loaded, SceneError> {
         camera,
         skipped_primitives,
     })
+}
+
+/// What the gltf crate takes for granted and does not check: its validation indexes the
+/// accessors by a primitive's `POSITION` unchecked, and an image in a buffer view must name
+/// its type (the crate unwraps it).
+fn check_json(path: &Path, json: &gltf::json::Root) -> Result<(), SceneError> {
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let position = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(a) = prim.attributes.get(&position)
+                && a.value() >= json.accessors.len()
+            {
+                return Err(err(
+                    path,
+                    format!(
+                        "mesh {m} primitive {p}: POSITION is accessor {}, but the file has {}",
+                        a.value(),
+                        json.accessors.len()
+                    ),
+                ));
+            }
+        }
+    }
+    for (i, image) in json.images.iter().enumerate() {
+        let problem = match (&image.buffer_view, &image.uri, &image.mime_type) {
+            (Some(_), _, None) => "is in a buffer view but has no mimeType",
+            (None, None, _) => "has neither a uri nor a bufferView",
+            _ => continue,
+        };
+        return Err(err(path, format!("image {i} {problem}")));
+    }
+    Ok(())
+}
+
+/// A GLB file's header length, which the gltf crate subtracts the header's 12 bytes from
+/// unchecked.
+fn check_glb_header(path: &Path, bytes: &[u8]) -> Result<(), SceneError> {
+    if let Some(h) = bytes.get(..12)
+        && h.starts_with(b"glTF")
+    {
+        let length = u32::from_le_bytes([h[8], h[9], h[10], h[11]]);
+        if length < 12 {
+            return Err(err(
+                path,
+                format!(
+                    "the GLB header gives a length of {length} bytes, less than the header's 12"
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// An accessor the mesh reads, checked as the gltf crate's reader does not: its type (the
+/// reader asserts the element size only in debug builds), and that its elements, sparse
+/// indices and values lie inside their buffer views and buffers (the reader computes those
+/// bounds without overflow checks). Without a buffer view, its elements are zeros (and
+/// sparse values), as many as it says: at most 2^24.
+fn check_accessor(
+    path: &Path,
+    mesh: &str,
+    what: &str,
+    a: &gltf::Accessor<'_>,
+    types: &[gltf::accessor::DataType],
+    dims: gltf::accessor::Dimensions,
+    buffers: &[Vec<u8>],
+) -> Result<(), SceneError> {
+    let bad = |problem: String| {
+        err(
+            path,
+            format!("mesh '{mesh}': {what} accessor {}: {problem}", a.index()),
+        )
+    };
+    if a.dimensions() != dims || !types.contains(&a.data_type()) {
+        return Err(bad(format!(
+            "{:?} of {:?}, not {dims:?} of {}",
+            a.dimensions(),
+            a.data_type(),
+            types
+                .iter()
+                .map(|t| format!("{t:?}"))
+                .collect::<Vec<_>>()
+                .join(" or ")
+        )));
+    }
+    if a.count() == 0 {
+        return Err(bad("no elements (count 0)".to_string()));
+    }
+    let fits = |view: gltf::buffer::View<'_>, offset: usize, count: usize, size: usize| {
+        let stride = view.stride().unwrap_or(size);
+        let end = stride
+            .checked_mul(count - 1)
+            .and_then(|n| n.checked_add(size))
+            .and_then(|n| n.checked_add(offset));
+        let view_end = view.offset().checked_add(view.length());
+        let buffer = buffers.get(view.buffer().index()).map_or(0, Vec::len);
+        if stride < size {
+            Err(bad(format!(
+                "buffer view {} has a stride of {stride} bytes, less than an element's {size}",
+                view.index()
+            )))
+        } else if end.is_none_or(|e| e > view.length()) || view_end.is_none_or(|e| e > buffer) {
+            Err(bad(format!(
+                "{count} elements of {size} bytes from byte {offset} of buffer view {} do not \
+                 fit in it or in its buffer",
+                view.index()
+            )))
+        } else {
+            Ok(())
+        }
+    };
+    match a.view() {
+        Some(view) => fits(view, a.offset(), a.count(), a.size())?,
+        None if a.count() > 1 << 24 => {
+            return Err(bad(format!(
+                "{} elements without a buffer view: at most 2^24",
+                a.count()
+            )));
+        }
+        None => {}
+    }
+    if let Some(sparse) = a.sparse() {
+        if sparse.count() == 0 {
+            return Err(bad("a sparse part of no elements".to_string()));
+        }
+        let (i, v) = (sparse.indices(), sparse.values());
+        fits(i.view(), i.offset(), sparse.count(), i.index_type().size())?;
+        fits(v.view(), v.offset(), sparse.count(), a.size())?;
+    }
+    Ok(())
 }
 
 /// The file's buffers: the GLB binary chunk, data URIs and files beside it.
@@ -214,21 +356,35 @@ fn shaded_mesh(
             continue;
         }
         // The gltf crate reads any accessor as the type asked for; the format requires
-        // positions to be three floats.
-        if let Some(a) = prim.get(&gltf::Semantic::Positions)
-            && (a.dimensions() != gltf::accessor::Dimensions::Vec3
-                || a.data_type() != gltf::accessor::DataType::F32)
+        // these types.
         {
-            return Err(err(
-                path,
-                format!(
-                    "mesh '{name}': POSITION accessor {} is {:?} of {:?}, not VEC3 of \
-                     FLOAT",
-                    a.index(),
-                    a.dimensions(),
-                    a.data_type()
+            use gltf::Semantic;
+            use gltf::accessor::{DataType as T, Dimensions as D};
+            for (semantic, what, types, dims) in [
+                (Semantic::Positions, "POSITION", &[T::F32][..], D::Vec3),
+                (Semantic::Normals, "NORMAL", &[T::F32], D::Vec3),
+                (
+                    Semantic::TexCoords(0),
+                    "TEXCOORD_0",
+                    &[T::F32, T::U8, T::U16],
+                    D::Vec2,
                 ),
-            ));
+            ] {
+                if let Some(a) = prim.get(&semantic) {
+                    check_accessor(path, &name, what, &a, types, dims, buffers)?;
+                }
+            }
+            if let Some(a) = prim.indices() {
+                check_accessor(
+                    path,
+                    &name,
+                    "indices",
+                    &a,
+                    &[T::U8, T::U16, T::U32],
+                    D::Scalar,
+                    buffers,
+                )?;
+            }
         }
         let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
         let Some(p) = reader.read_positions() else {
@@ -434,7 +590,7 @@ fn material(
             let (bytes, ext, label) = match image.source() {
                 gltf::image::Source::View { view, mime_type } => {
                     let buf = &buffers[view.buffer().index()];
-                    let end = view.offset() + view.length();
+                    let end = view.offset().saturating_add(view.length());
                     if end > buf.len() {
                         return Err(err(path, format!("image {idx}: buffer view out of range")));
                     }
@@ -598,6 +754,39 @@ pub(crate) mod tests {
         );
     }
 
+    /// Files the gltf crate would panic on (in its validation or its accessor reader) are
+    /// errors naming the problem.
+    #[test]
+    fn accessors_out_of_range_or_of_the_wrong_type_are_errors() {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("bad.gltf");
+        for (from, to, want) in [
+            (
+                r#""POSITION": 0}"#,
+                r#""POSITION": 7}"#,
+                "POSITION is accessor 7, but the file has 2",
+            ),
+            (
+                r#""count": 4, "type": "VEC3""#,
+                r#""count": 4000000000, "type": "VEC3""#,
+                "4000000000 elements of 12 bytes",
+            ),
+            (
+                r#""componentType": 5123"#,
+                r#""componentType": 5126"#,
+                "indices accessor 1: Scalar of F32",
+            ),
+        ] {
+            let text = quad_gltf();
+            assert!(text.contains(from), "{from}");
+            std::fs::write(&p, text.replace(from, to)).unwrap();
+            let e = super::super::load(p.to_str().unwrap())
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("bad.gltf") && e.contains(want), "{e}");
+        }
+    }
+
     #[test]
     fn positions_that_are_not_three_floats_are_an_error() {
         let d = tempfile::tempdir().unwrap();
@@ -610,7 +799,7 @@ pub(crate) mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("vec2.gltf") && e.contains("not VEC3 of FLOAT"),
+            e.contains("vec2.gltf") && e.contains("Vec2 of F32, not Vec3 of F32"),
             "{e}"
         );
     }
