@@ -87,24 +87,297 @@ pub enum BackendError {
     },
 }
 
+/// What a backend needs of the CPU beyond what its build targets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Cpu {
+    /// Nothing: the target's baseline (x86-64's SSE2) is enough.
+    Baseline,
+    /// AVX2 + FMA (pulp's `V3`).
+    V3,
+    /// AVX-512 F/BW/CD/DQ/VL (pulp's `V4`).
+    V4,
+    /// NEON (pulp's `Neon`).
+    Neon,
+}
+
+/// One backend's facts. [`INFO`] holds a row per backend, in the enum's order, and every
+/// per-backend property below reads it; only [`Backend::run`] names the lane types.
+struct Info {
+    backend: Backend,
+    name: &'static str,
+    lanes: usize,
+    /// The reports' group: `wide`, `pulp`, or the backend's own name.
+    family: &'static str,
+    /// In the sweeps ([`Backend::ALL`]); the others are [`Backend::FACTORS`].
+    swept: bool,
+    /// Written by hand per instruction set, as the paper's were.
+    hand_written: bool,
+    /// Rank among the backends of its width for [`Backend::preferred_for_lanes`] (lower
+    /// first); `None`: never the one measured at its width.
+    preference: Option<u8>,
+    /// The cargo feature that compiles it in (`""`: none) and whether this build has it.
+    feature: &'static str,
+    feature_on: bool,
+    /// The target architecture it needs (`""`: any) and whether this build is for it.
+    arch: &'static str,
+    arch_on: bool,
+    cpu: Cpu,
+    /// `rsqrt` and `recip` are the hardware's estimates (else exact).
+    estimates: bool,
+    /// The instruction set its code is compiled for, in this build.
+    instructions: &'static str,
+}
+
+const X86: bool = cfg!(target_arch = "x86_64");
+const ARM: bool = cfg!(target_arch = "aarch64");
+
+/// What `wide` compiles to: the build's target features.
+const WIDE_INSTRUCTIONS: &str = if ARM {
+    "NEON (wide's aarch64 paths)"
+} else if cfg!(target_feature = "avx512f") {
+    "the build's target features: AVX-512"
+} else if cfg!(target_feature = "avx2") {
+    "the build's target features: AVX2"
+} else {
+    "the build's target features: SSE2 (the x86-64 baseline)"
+};
+
+/// Every backend's facts, in the order of [`Backend`]'s variants.
+const INFO: [Info; 11] = [
+    Info {
+        backend: Backend::Scalar,
+        name: "scalar",
+        lanes: 1,
+        family: "scalar",
+        swept: true,
+        hand_written: true,
+        preference: Some(0),
+        feature: "",
+        feature_on: true,
+        arch: "",
+        arch_on: true,
+        cpu: Cpu::Baseline,
+        estimates: false,
+        instructions: if ARM {
+            "A64 scalar floating point"
+        } else {
+            "SSE2 scalar (the x86-64 baseline)"
+        },
+    },
+    Info {
+        backend: Backend::Sse,
+        name: "sse",
+        lanes: 4,
+        family: "sse",
+        swept: true,
+        hand_written: true,
+        preference: Some(0),
+        feature: "sse",
+        feature_on: cfg!(feature = "sse"),
+        arch: "x86-64",
+        arch_on: X86,
+        cpu: Cpu::Baseline,
+        estimates: true,
+        instructions: "SSE2 (the x86-64 baseline)",
+    },
+    Info {
+        backend: Backend::Wide4,
+        name: "wide4",
+        lanes: 4,
+        family: "wide",
+        swept: true,
+        hand_written: false,
+        preference: Some(2),
+        feature: "wide",
+        feature_on: cfg!(feature = "wide"),
+        arch: "",
+        arch_on: true,
+        cpu: Cpu::Baseline,
+        estimates: X86,
+        instructions: WIDE_INSTRUCTIONS,
+    },
+    Info {
+        backend: Backend::Wide8,
+        name: "wide8",
+        lanes: 8,
+        family: "wide",
+        swept: true,
+        hand_written: false,
+        preference: Some(2),
+        feature: "wide",
+        feature_on: cfg!(feature = "wide"),
+        arch: "",
+        arch_on: true,
+        cpu: Cpu::Baseline,
+        estimates: X86,
+        instructions: WIDE_INSTRUCTIONS,
+    },
+    Info {
+        backend: Backend::Wide16,
+        name: "wide16",
+        lanes: 16,
+        family: "wide",
+        swept: true,
+        hand_written: false,
+        preference: Some(2),
+        feature: "wide",
+        feature_on: cfg!(feature = "wide"),
+        arch: "",
+        arch_on: true,
+        cpu: Cpu::Baseline,
+        estimates: X86,
+        instructions: WIDE_INSTRUCTIONS,
+    },
+    Info {
+        backend: Backend::Avx2,
+        name: "avx2",
+        lanes: 8,
+        family: "avx2",
+        swept: true,
+        hand_written: true,
+        preference: Some(0),
+        feature: "pulp",
+        feature_on: cfg!(feature = "pulp"),
+        arch: "x86-64",
+        arch_on: X86,
+        cpu: Cpu::V3,
+        estimates: true,
+        instructions: "AVX2 + FMA (pulp's V3 entry point)",
+    },
+    Info {
+        backend: Backend::Avx512,
+        name: "avx512",
+        lanes: 16,
+        family: "avx512",
+        swept: true,
+        hand_written: true,
+        preference: Some(0),
+        feature: "pulp",
+        feature_on: cfg!(feature = "pulp"),
+        arch: "x86-64",
+        arch_on: X86,
+        cpu: Cpu::V4,
+        estimates: true,
+        instructions: "AVX-512 F/BW/CD/DQ/VL (pulp's V4 entry point)",
+    },
+    Info {
+        backend: Backend::Pulp8,
+        name: "pulp8",
+        lanes: 8,
+        family: "pulp",
+        swept: true,
+        hand_written: false,
+        preference: None,
+        feature: "pulp",
+        feature_on: cfg!(feature = "pulp"),
+        arch: "x86-64",
+        arch_on: X86,
+        cpu: Cpu::V3,
+        estimates: false,
+        instructions: "AVX2 + FMA (pulp V3)",
+    },
+    Info {
+        backend: Backend::Pulp16,
+        name: "pulp16",
+        lanes: 16,
+        family: "pulp",
+        swept: true,
+        hand_written: false,
+        preference: None,
+        feature: "pulp",
+        feature_on: cfg!(feature = "pulp"),
+        arch: "x86-64",
+        arch_on: X86,
+        cpu: Cpu::V4,
+        estimates: false,
+        instructions: "AVX-512 F/BW/CD/DQ/VL (pulp V4)",
+    },
+    Info {
+        backend: Backend::Pulp4,
+        name: "pulp4",
+        lanes: 4,
+        family: "pulp",
+        swept: true,
+        hand_written: false,
+        // aarch64 has no hand-written backend: pulp4 is measured there before wide4.
+        preference: Some(1),
+        feature: "pulp",
+        feature_on: cfg!(feature = "pulp"),
+        arch: "aarch64",
+        arch_on: ARM,
+        cpu: Cpu::Neon,
+        estimates: false,
+        instructions: "NEON (pulp Neon)",
+    },
+    Info {
+        backend: Backend::ScalarEst,
+        name: "scalar-est",
+        lanes: 1,
+        family: "scalar-est",
+        swept: false,
+        hand_written: false,
+        preference: None,
+        feature: "",
+        feature_on: true,
+        // The estimate instructions of the SIMD backends it stands in for.
+        arch: "x86-64",
+        arch_on: X86,
+        cpu: Cpu::Baseline,
+        estimates: true,
+        instructions: "SSE scalar, with rsqrtss/rcpss estimates",
+    },
+];
+
+// The table is in the enum's order: `Backend::info` indexes it by discriminant.
+const _: () = {
+    let mut i = 0;
+    while i < INFO.len() {
+        assert!(
+            INFO[i].backend as usize == i,
+            "INFO is not in Backend's order"
+        );
+        i += 1;
+    }
+};
+
+/// How many rows of [`INFO`] are swept (`true`) or not.
+const fn count(swept: bool) -> usize {
+    let (mut n, mut i) = (0, 0);
+    while i < INFO.len() {
+        if INFO[i].swept == swept {
+            n += 1;
+        }
+        i += 1;
+    }
+    n
+}
+
+/// The backends of [`INFO`] that are swept (`true`) or not, in its order.
+const fn collect<const N: usize>(swept: bool) -> [Backend; N] {
+    let mut out = [Backend::Scalar; N];
+    let (mut n, mut i) = (0, 0);
+    while i < INFO.len() {
+        if INFO[i].swept == swept {
+            out[n] = INFO[i].backend;
+            n += 1;
+        }
+        i += 1;
+    }
+    out
+}
+
 impl Backend {
-    /// Every backend, narrowest first.
-    pub const ALL: [Backend; 10] = [
-        Backend::Scalar,
-        Backend::Sse,
-        Backend::Wide4,
-        Backend::Wide8,
-        Backend::Wide16,
-        Backend::Avx2,
-        Backend::Avx512,
-        Backend::Pulp8,
-        Backend::Pulp16,
-        Backend::Pulp4,
-    ];
+    /// Every swept backend, in [`INFO`]'s order (narrowest first within each family).
+    pub const ALL: [Backend; count(true)] = collect(true);
 
     /// The backends outside the sweeps, which the command line and the factor table of
     /// `table3` name: the scalar backend with estimated arithmetic.
-    pub const FACTORS: [Backend; 1] = [Backend::ScalarEst];
+    pub const FACTORS: [Backend; count(false)] = collect(false);
+
+    /// This backend's row of [`INFO`].
+    const fn info(self) -> &'static Info {
+        &INFO[self as usize]
+    }
 
     /// The set of [`Backend::every`], for a kernel's [`Kernel::BACKENDS`].
     pub const WITH_FACTORS: u32 = Backend::bits(&Backend::ALL) | Backend::bits(&Backend::FACTORS);
@@ -134,116 +407,60 @@ impl Backend {
     /// avx512, scalar-est, and wide on x86-64) or exact divisions and square roots (`exact`:
     /// scalar, the pulp backends, wide elsewhere): the `arithmetic` column of the factor table.
     pub fn arithmetic(self) -> &'static str {
-        match self {
-            Backend::Scalar | Backend::Pulp8 | Backend::Pulp16 | Backend::Pulp4 => "exact",
-            Backend::Sse | Backend::Avx2 | Backend::Avx512 | Backend::ScalarEst => "estimate",
-            Backend::Wide4 | Backend::Wide8 | Backend::Wide16 => {
-                if cfg!(target_arch = "x86_64") {
-                    "estimate"
-                } else {
-                    "exact"
-                }
-            }
+        if self.info().estimates {
+            "estimate"
+        } else {
+            "exact"
         }
     }
 
     /// The name used on the command line and in results files.
     pub fn name(self) -> &'static str {
-        match self {
-            Backend::Scalar => "scalar",
-            Backend::Sse => "sse",
-            Backend::Wide4 => "wide4",
-            Backend::Wide8 => "wide8",
-            Backend::Wide16 => "wide16",
-            Backend::Avx2 => "avx2",
-            Backend::Avx512 => "avx512",
-            Backend::Pulp8 => "pulp8",
-            Backend::Pulp16 => "pulp16",
-            Backend::Pulp4 => "pulp4",
-            Backend::ScalarEst => "scalar-est",
-        }
+        self.info().name
     }
 
     /// Lanes per packet.
     pub fn lanes(self) -> usize {
-        match self {
-            Backend::Scalar | Backend::ScalarEst => 1,
-            Backend::Sse | Backend::Wide4 | Backend::Pulp4 => 4,
-            Backend::Wide8 | Backend::Avx2 | Backend::Pulp8 => 8,
-            Backend::Wide16 | Backend::Avx512 | Backend::Pulp16 => 16,
-        }
+        self.info().lanes
     }
 
     /// Whether this build has the backend (cargo features and target architecture).
     pub fn compiled(self) -> bool {
-        match self {
-            Backend::Scalar => true,
-            Backend::ScalarEst => cfg!(target_arch = "x86_64"),
-            Backend::Sse => cfg!(all(feature = "sse", target_arch = "x86_64")),
-            Backend::Wide4 | Backend::Wide8 | Backend::Wide16 => cfg!(feature = "wide"),
-            Backend::Avx2 | Backend::Avx512 | Backend::Pulp8 | Backend::Pulp16 => {
-                cfg!(all(feature = "pulp", target_arch = "x86_64"))
-            }
-            Backend::Pulp4 => cfg!(all(feature = "pulp", target_arch = "aarch64")),
-        }
+        self.info().feature_on && self.info().arch_on
     }
 
     /// Why the backend cannot run here, or `None` when it can.
     pub fn unavailable_reason(self) -> Option<String> {
-        if !self.compiled() {
-            return Some(match self {
-                Backend::Sse if cfg!(feature = "sse") => {
-                    "the `sse` backend needs an x86-64 target (this build is for another architecture)"
-                        .to_string()
-                }
-                Backend::Avx2 | Backend::Avx512 | Backend::Pulp8 | Backend::Pulp16
-                    if cfg!(feature = "pulp") =>
-                {
-                    format!("the `{}` backend needs an x86-64 target", self.name())
-                }
-                Backend::Pulp4 if cfg!(feature = "pulp") => {
-                    "the `pulp4` backend needs an aarch64 target (NEON)".to_string()
-                }
-                Backend::ScalarEst => "the `scalar-est` backend needs an x86-64 target (the \
-                    estimate instructions of the SIMD backends it stands in for)"
-                    .to_string(),
-                _ => format!(
-                    "not compiled in: build with the cargo feature `{}`",
-                    self.feature()
-                ),
-            });
+        let info = self.info();
+        if !info.feature_on {
+            return Some(format!(
+                "not compiled in: build with the cargo feature `{}`",
+                info.feature
+            ));
         }
-        match self {
-            Backend::Avx2 | Backend::Pulp8 if !v3_supported() => {
-                Some("this CPU lacks AVX2 or FMA (pulp V3)".to_string())
-            }
-            Backend::Avx512 | Backend::Pulp16 if !v4_supported() => {
-                Some("this CPU lacks AVX-512 F/BW/CD/DQ/VL (pulp V4)".to_string())
-            }
-            Backend::Pulp4 if !neon_supported() => Some("this CPU lacks NEON".to_string()),
-            _ => None,
+        if !info.arch_on {
+            return Some(format!(
+                "the `{}` backend needs an {} target (this build is for another architecture)",
+                info.name, info.arch
+            ));
+        }
+        if cpu_has(info.cpu) {
+            None
+        } else {
+            Some(format!("this CPU lacks {}", cpu_needs(info.cpu)))
         }
     }
 
     /// The family the reports group the backend in: `wide` for wide4/8/16, `pulp` for
     /// pulp4/8/16, the backend itself for the hand-written ones.
     pub fn family(self) -> &'static str {
-        match self {
-            Backend::Wide4 | Backend::Wide8 | Backend::Wide16 => "wide",
-            Backend::Pulp4 | Backend::Pulp8 | Backend::Pulp16 => "pulp",
-            b => b.name(),
-        }
+        self.info().family
     }
 
     /// The swept backends written by hand per instruction set, as the paper's were (scalar,
     /// sse, avx2, avx512): the lines of the reports' speedup-versus-lanes plots.
     pub fn hand_written() -> impl Iterator<Item = Backend> {
-        Backend::ALL.into_iter().filter(|b| {
-            matches!(
-                b,
-                Backend::Scalar | Backend::Sse | Backend::Avx2 | Backend::Avx512
-            )
-        })
+        Backend::ALL.into_iter().filter(|b| b.info().hand_written)
     }
 
     /// The families of [`Backend::ALL`] (as [`Backend::family`] names them), the hand-written
@@ -273,41 +490,12 @@ impl Backend {
 
     /// The instruction set the backend's code is compiled for, in this build.
     pub fn instructions(self) -> &'static str {
-        let arm = cfg!(target_arch = "aarch64");
-        match self {
-            Backend::Scalar if arm => "A64 scalar floating point",
-            Backend::Scalar => "SSE2 scalar (the x86-64 baseline)",
-            Backend::ScalarEst => "SSE scalar, with rsqrtss/rcpss estimates",
-            Backend::Sse => "SSE2 (the x86-64 baseline)",
-            Backend::Wide4 | Backend::Wide8 | Backend::Wide16 => {
-                if arm {
-                    "NEON (wide's aarch64 paths)"
-                } else if cfg!(target_feature = "avx512f") {
-                    "the build's target features: AVX-512"
-                } else if cfg!(target_feature = "avx2") {
-                    "the build's target features: AVX2"
-                } else {
-                    "the build's target features: SSE2 (the x86-64 baseline)"
-                }
-            }
-            Backend::Avx2 => "AVX2 + FMA (pulp's V3 entry point)",
-            Backend::Pulp8 => "AVX2 + FMA (pulp V3)",
-            Backend::Avx512 => "AVX-512 F/BW/CD/DQ/VL (pulp's V4 entry point)",
-            Backend::Pulp16 => "AVX-512 F/BW/CD/DQ/VL (pulp V4)",
-            Backend::Pulp4 => "NEON (pulp Neon)",
-        }
+        self.info().instructions
     }
 
     /// The cargo feature that compiles the backend in (`scalar` has none).
     pub fn feature(self) -> &'static str {
-        match self {
-            Backend::Scalar | Backend::ScalarEst => "",
-            Backend::Sse => "sse",
-            Backend::Wide4 | Backend::Wide8 | Backend::Wide16 => "wide",
-            Backend::Avx2 | Backend::Avx512 | Backend::Pulp8 | Backend::Pulp16 | Backend::Pulp4 => {
-                "pulp"
-            }
-        }
+        self.info().feature
     }
 
     /// Whether the backend can run here.
@@ -328,21 +516,19 @@ impl Backend {
     /// backend) where this CPU runs it, else `wide`.
     pub fn preferred_for_lanes(lanes: usize) -> Option<Backend> {
         Backend::preference(lanes)
-            .iter()
-            .copied()
+            .into_iter()
             .find(|b| b.is_available())
     }
 
     /// The backends of a packet width in the order [`Backend::preferred_for_lanes`] picks
     /// them, usable here or not (reports pick from the rows a results file has).
-    pub fn preference(lanes: usize) -> &'static [Backend] {
-        match lanes {
-            1 => &[Backend::Scalar],
-            4 => &[Backend::Sse, Backend::Pulp4, Backend::Wide4],
-            8 => &[Backend::Avx2, Backend::Wide8],
-            16 => &[Backend::Avx512, Backend::Wide16],
-            _ => &[],
-        }
+    pub fn preference(lanes: usize) -> Vec<Backend> {
+        let mut v: Vec<Backend> = Backend::ALL
+            .into_iter()
+            .filter(|b| b.lanes() == lanes && b.info().preference.is_some())
+            .collect();
+        v.sort_by_key(|b| b.info().preference);
+        v
     }
 
     /// The widest hand-written or run-time dispatched backend usable here (the default for
@@ -364,7 +550,7 @@ impl Backend {
         if spec.eq_ignore_ascii_case("native-all") {
             return Ok(Backend::ALL
                 .into_iter()
-                .filter(|b| b.compiled() && cpu_reports(*b))
+                .filter(|b| b.compiled() && cpu_reports(b.info().cpu))
                 .collect());
         }
         spec.split(',')
@@ -525,76 +711,63 @@ fn run_on<K: Kernel, L: Lanes>(k: K, l: L) -> K::Output {
 /// The environment variable naming the backends a test run must not skip.
 pub const REQUIRE_ENV: &str = "COHERENT_REQUIRE_BACKENDS";
 
-/// Whether the CPU reports the instructions `b` needs (`std` detection, not pulp's).
-fn cpu_reports(b: Backend) -> bool {
+/// Whether the CPU reports the instructions of `cpu` (`std` detection, not pulp's).
+fn cpu_reports(cpu: Cpu) -> bool {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::is_x86_feature_detected as has;
-        match b {
-            Backend::Avx2 | Backend::Pulp8 => has!("avx2") && has!("fma"),
-            Backend::Avx512 | Backend::Pulp16 => {
+        match cpu {
+            // SSE2 is part of x86-64 itself.
+            Cpu::Baseline => true,
+            Cpu::V3 => has!("avx2") && has!("fma"),
+            Cpu::V4 => {
                 has!("avx512f")
                     && has!("avx512bw")
                     && has!("avx512cd")
                     && has!("avx512dq")
                     && has!("avx512vl")
             }
-            Backend::Pulp4 => false,
-            // SSE2 is part of x86-64 itself; `wide` and scalar need nothing more. No default
-            // arm: a new backend must say what it needs.
-            Backend::Scalar
-            | Backend::ScalarEst
-            | Backend::Sse
-            | Backend::Wide4
-            | Backend::Wide8
-            | Backend::Wide16 => true,
+            Cpu::Neon => false,
         }
     }
-    #[cfg(not(target_arch = "x86_64"))]
+    #[cfg(target_arch = "aarch64")]
     {
-        match b {
-            Backend::Sse
-            | Backend::Avx2
-            | Backend::Avx512
-            | Backend::Pulp8
-            | Backend::Pulp16
-            | Backend::ScalarEst => false,
-            #[cfg(target_arch = "aarch64")]
-            Backend::Pulp4 => std::arch::is_aarch64_feature_detected!("neon"),
-            #[cfg(not(target_arch = "aarch64"))]
-            Backend::Pulp4 => false,
-            Backend::Scalar | Backend::Wide4 | Backend::Wide8 | Backend::Wide16 => true,
+        match cpu {
+            Cpu::Baseline => true,
+            Cpu::V3 | Cpu::V4 => false,
+            Cpu::Neon => std::arch::is_aarch64_feature_detected!("neon"),
         }
+    }
+    #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
+    {
+        cpu == Cpu::Baseline
     }
 }
 
-/// Whether this CPU runs pulp's `V3` (AVX2 + FMA): avx2 and pulp8.
-#[cfg(all(feature = "pulp", target_arch = "x86_64"))]
-fn v3_supported() -> bool {
-    pulp::x86::V3::try_new().is_some()
-}
-#[cfg(not(all(feature = "pulp", target_arch = "x86_64")))]
-fn v3_supported() -> bool {
-    false
-}
-/// Whether this CPU runs pulp's `V4` (AVX-512 F/BW/CD/DQ/VL): avx512 and pulp16.
-#[cfg(all(feature = "pulp", target_arch = "x86_64"))]
-fn v4_supported() -> bool {
-    pulp::x86::V4::try_new().is_some()
-}
-#[cfg(not(all(feature = "pulp", target_arch = "x86_64")))]
-fn v4_supported() -> bool {
-    false
+/// Whether this CPU runs the code of `cpu` (pulp's tokens, which the run-time dispatched
+/// backends run under).
+fn cpu_has(cpu: Cpu) -> bool {
+    match cpu {
+        Cpu::Baseline => true,
+        #[cfg(all(feature = "pulp", target_arch = "x86_64"))]
+        Cpu::V3 => pulp::x86::V3::try_new().is_some(),
+        #[cfg(all(feature = "pulp", target_arch = "x86_64"))]
+        Cpu::V4 => pulp::x86::V4::try_new().is_some(),
+        #[cfg(all(feature = "pulp", target_arch = "aarch64"))]
+        Cpu::Neon => pulp::aarch64::Neon::try_new().is_some(),
+        #[allow(unreachable_patterns)]
+        _ => false,
+    }
 }
 
-/// Whether this CPU runs pulp's `Neon`: pulp4.
-#[cfg(all(feature = "pulp", target_arch = "aarch64"))]
-fn neon_supported() -> bool {
-    pulp::aarch64::Neon::try_new().is_some()
-}
-#[cfg(not(all(feature = "pulp", target_arch = "aarch64")))]
-fn neon_supported() -> bool {
-    false
+/// What `cpu` needs, for an error message.
+fn cpu_needs(cpu: Cpu) -> &'static str {
+    match cpu {
+        Cpu::Baseline => "nothing",
+        Cpu::V3 => "AVX2 or FMA (pulp V3)",
+        Cpu::V4 => "AVX-512 F/BW/CD/DQ/VL (pulp V4)",
+        Cpu::Neon => "NEON",
+    }
 }
 
 impl fmt::Display for Backend {
@@ -657,9 +830,27 @@ mod tests {
         // std's feature detection and pulp's tokens agree on what this CPU runs.
         for b in Backend::every() {
             if b.compiled() {
-                assert_eq!(cpu_reports(b), b.is_available(), "{b}");
+                assert_eq!(cpu_reports(b.info().cpu), b.is_available(), "{b}");
             }
         }
+    }
+
+    #[test]
+    fn the_table_gives_the_lists() {
+        assert_eq!(Backend::ALL.len() + Backend::FACTORS.len(), INFO.len());
+        assert_eq!(Backend::FACTORS, [Backend::ScalarEst]);
+        assert_eq!(Backend::preference(1), [Backend::Scalar]);
+        assert_eq!(
+            Backend::preference(4),
+            [Backend::Sse, Backend::Pulp4, Backend::Wide4]
+        );
+        assert_eq!(Backend::preference(8), [Backend::Avx2, Backend::Wide8]);
+        assert_eq!(Backend::preference(16), [Backend::Avx512, Backend::Wide16]);
+        assert!(Backend::preference(3).is_empty());
+        // Estimates where the hardware's are used: the factor table's `arithmetic`.
+        assert_eq!(Backend::Avx2.arithmetic(), "estimate");
+        assert_eq!(Backend::Pulp8.arithmetic(), "exact");
+        assert_eq!(Backend::Scalar.arithmetic(), "exact");
     }
 
     #[test]
