@@ -96,6 +96,35 @@ impl AccelKind {
         None
     }
 
+    /// What it is and whether it runs here, for `coherent info`.
+    pub fn describe(self) -> String {
+        match self {
+            AccelKind::Bsp => "the paper's two-level BSP, packets of every backend's width".into(),
+            #[cfg(feature = "embree")]
+            AccelKind::Embree => match coherent_embree::version() {
+                Ok(v) => format!(
+                    "Embree {}.{}.{} (rtcGetDeviceProperty VERSION {v}), packets of 1, 4, 8, 16",
+                    v / 10000,
+                    v / 100 % 100,
+                    v % 100
+                ),
+                Err(e) => format!("compiled in, not usable here: {e}"),
+            },
+            #[cfg(not(feature = "embree"))]
+            AccelKind::Embree => format!("not compiled in (cargo feature `{}`)", self.name()),
+            #[cfg(feature = "obvhs")]
+            AccelKind::Obvhs => {
+                "obvhs BVH2 / CWBVH, single rays (packets served lane by lane)".into()
+            }
+            #[cfg(not(feature = "obvhs"))]
+            AccelKind::Obvhs => format!("not compiled in (cargo feature `{}`)", self.name()),
+            AccelKind::Brute => {
+                "every ray against every triangle: the reference the tests check the others by"
+                    .into()
+            }
+        }
+    }
+
     /// The accelerators that can be built here.
     pub fn available() -> Vec<AccelKind> {
         Self::ALL

@@ -309,47 +309,11 @@ fn info(json: bool) -> anyhow::Result<()> {
          operations) choose AVX2/AVX-512 at run time."
     )?;
     writeln!(out, "accelerators:")?;
-    writeln!(
-        out,
-        "  bsp     the paper's two-level BSP, packets of every backend's width"
-    )?;
-    writeln!(out, "  embree  {}", embree_state())?;
-    writeln!(out, "  obvhs   {}", obvhs_state())?;
-    writeln!(
-        out,
-        "  brute   every ray against every triangle: the reference the tests check the others by"
-    )?;
+    for k in AccelKind::ALL {
+        writeln!(out, "  {:<7} {}", k.name(), k.describe())?;
+    }
     out.flush()?;
     Ok(())
-}
-
-/// Whether Embree is compiled in and loadable here, with its version or the reason.
-fn embree_state() -> String {
-    #[cfg(feature = "embree")]
-    {
-        match coherent::embree::version() {
-            Ok(v) => format!(
-                "Embree {}.{}.{} (rtcGetDeviceProperty VERSION {v}), packets of 1, 4, 8, 16",
-                v / 10000,
-                v / 100 % 100,
-                v % 100
-            ),
-            Err(e) => format!("compiled in, not usable here: {e}"),
-        }
-    }
-    #[cfg(not(feature = "embree"))]
-    {
-        "not compiled in (cargo feature `embree`)".to_owned()
-    }
-}
-
-/// Whether obvhs is compiled in.
-fn obvhs_state() -> String {
-    if cfg!(feature = "obvhs") {
-        "obvhs BVH2 / CWBVH, single rays (packets served lane by lane)".to_owned()
-    } else {
-        "not compiled in (cargo feature `obvhs`)".to_owned()
-    }
 }
 
 /// `--backend`'s help: every backend the dispatch module has, by family.

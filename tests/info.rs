@@ -36,6 +36,18 @@ fn info_lists_the_machine_the_build_and_every_backend() {
         let usable = line.contains("usable here") && !line.contains("not usable");
         assert_eq!(usable, backend.is_available(), "{line}");
     }
+    // Every accelerator, after the header, with what it is or why it is not here.
+    let accelerators = text
+        .split_once("accelerators:")
+        .unwrap_or_else(|| panic!("no accelerators in:\n{text}"))
+        .1;
+    for k in coherent::accel_any::AccelKind::ALL {
+        let line = accelerators
+            .lines()
+            .find(|l| l.trim_start().starts_with(&format!("{} ", k.name())))
+            .unwrap_or_else(|| panic!("no line for {k}:\n{text}"));
+        assert_eq!(line.contains("not compiled in"), !k.compiled(), "{line}");
+    }
 }
 
 #[test]

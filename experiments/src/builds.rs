@@ -300,12 +300,19 @@ fn plot(ctx: &Ctx) -> anyhow::Result<()> {
     let scenes = t.distinct("scene")?;
     let threads = threads_in(&t)?;
     let mut series = Vec::new();
-    for (accel, preset) in [
-        ("bsp", "exact"),
-        ("bsp", "fast"),
-        ("embree", "default"),
-        ("obvhs", "default"),
-    ] {
+    // Every (structure, preset) the file has, in its order.
+    let mut pairs: Vec<(String, String)> = Vec::new();
+    for r in 0..t.rows.len() {
+        let pair = (
+            t.get(r, "accel")?.to_owned(),
+            t.get(r, "preset")?.to_owned(),
+        );
+        if !pairs.contains(&pair) {
+            pairs.push(pair);
+        }
+    }
+    for (accel, preset) in &pairs {
+        let (accel, preset) = (accel.as_str(), preset.as_str());
         for th in &threads {
             let v: Vec<f64> = scenes
                 .iter()
