@@ -1,13 +1,15 @@
 //! Criterion benches of the two-level BSP (paper section 3): object-tree build (100k
 //! triangles, each preset), top-level rebuild over 1,024 moving instances, and traversal of
 //! primary, shadow and diffuse rays one at a time and in packets of every available backend;
-//! the same builds and traversals for Embree and obvhs (BVH2, CWBVH; single rays only) where
-//! compiled in.
+//! the same builds (Embree's qualities, obvhs' BVH2 and CWBVH presets) where compiled in, and
+//! the same traversals for every compared accelerator of `AccelKind` that runs here (single
+//! rays only for those without packets of their own).
 //!
 //! `cargo bench --bench accel` (add `-- build` or `-- trace` to pick a group).
 
 use std::hint::black_box;
 
+use coherent::accel_any::{AccelKind, AccelVisitor, AnyAccel, AnyParams};
 use coherent::simd::Backend;
 use coherent_accel::scenes::{self, SceneSize};
 use coherent_accel::shapes::terrain;
@@ -129,24 +131,42 @@ fn trace(c: &mut Criterion) {
     ] {
         let bsp = Bsp::build(&s.scene, &BspParams::default()).unwrap();
         trace_accel(&mut g, &bsp, &s, &bsp, (w, h), true);
-        #[cfg(feature = "embree")]
-        match coherent::embree::Embree::build(&s.scene, &Default::default()) {
-            Ok(embree) => trace_accel(&mut g, &embree, &s, &bsp, (w, h), true),
-            Err(e) => eprintln!("skipping the Embree benches: {e}"),
-        }
-        #[cfg(feature = "obvhs")]
-        for kind in coherent::obvhs::Kind::ALL {
-            use coherent::obvhs::{Obvhs, ObvhsParams};
-            let p = ObvhsParams {
-                kind,
-                ..ObvhsParams::default()
-            };
-            let o = Obvhs::build(&s.scene, &p).unwrap();
-            // obvhs traverses single rays only: no packet benches.
-            trace_accel(&mut g, &o, &s, &bsp, (w, h), false);
+        for kind in AccelKind::compared().filter(|&k| k != AccelKind::Bsp) {
+            if let Some(why) = kind.unavailable_reason() {
+                eprintln!("skipping the {kind} benches: {why}");
+                continue;
+            }
+            match AnyAccel::build(&s.scene, &AnyParams::of(kind)) {
+                // A structure without packets of its own would time its lane loop: single
+                // rays only.
+                Ok(a) => a.visit(Trace {
+                    g: &mut g,
+                    s: &s,
+                    bsp: &bsp,
+                    size: (w, h),
+                    packets: kind.has_packets(),
+                }),
+                Err(e) => eprintln!("skipping the {kind} benches: {e}"),
+            }
         }
     }
     g.finish();
+}
+
+/// [`trace_accel`] on the concrete structure inside an [`AnyAccel`] (no `match` per query).
+struct Trace<'a, 'g> {
+    g: &'a mut BenchmarkGroup<'g, WallTime>,
+    s: &'a scenes::BuiltinScene,
+    bsp: &'a Bsp,
+    size: (u32, u32),
+    packets: bool,
+}
+
+impl AccelVisitor for Trace<'_, '_> {
+    type Output = ();
+    fn visit<A: Accel>(self, a: &A) {
+        trace_accel(self.g, a, self.s, self.bsp, self.size, self.packets)
+    }
 }
 
 /// Primary, shadow and diffuse rays through `accel`, one at a time and (with `packets`) in
