@@ -13,9 +13,14 @@ fn coherent(args: &[&str]) -> Output {
 
 /// `coherent render cornell` at 32 x 24, 1 spp, one thread, quiet, into `out`, with `extra`.
 fn render_cornell(out: &std::path::Path, extra: &[&str]) -> Output {
+    render_small("cornell", out, extra)
+}
+
+/// `coherent render SCENE` at 32 x 24, 1 spp, one thread, quiet, into `out`, with `extra`.
+fn render_small(scene: &str, out: &std::path::Path, extra: &[&str]) -> Output {
     let mut args = vec![
         "render",
-        "cornell",
+        scene,
         "--resolution",
         "32x24",
         "--spp",
@@ -293,21 +298,7 @@ intensity = [40.0, 40.0, 40.0]
     .unwrap();
     let png = |name: &str, extra: &[&str]| {
         let path = dir.path().join(name);
-        let mut args = vec![
-            "render",
-            scene.to_str().unwrap(),
-            "--resolution",
-            "32x24",
-            "--spp",
-            "1",
-            "--threads",
-            "1",
-            "--quiet",
-            "--out",
-            path.to_str().unwrap(),
-        ];
-        args.extend_from_slice(extra);
-        let out = coherent(&args);
+        let out = render_small(scene.to_str().unwrap(), &path, extra);
         assert!(out.status.success(), "{}", text(&out));
         std::fs::read(path).unwrap()
     };
