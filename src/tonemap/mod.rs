@@ -140,8 +140,8 @@ impl Adaptation {
 
     /// From luminances (non-finite and negative values are skipped). Black points (rays
     /// that left the scene, unlit surfaces) are left out of the log average: with `delta`
-    /// each pulled it down by up to `ln(1e-6)`, so a frame with much background (41% of
-    /// `cornell`) showed its lit room white. An empty or black set gives `max = 0`, which
+    /// each pulled it down by up to `ln(1e-6)`, so a frame with much background showed its
+    /// lit part too bright. An empty or black set gives `max = 0`, which
     /// maps everything to black.
     pub fn from_luminances(ls: impl IntoIterator<Item = f32>) -> Adaptation {
         let lit: Vec<f32> = ls
