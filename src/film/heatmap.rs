@@ -57,10 +57,39 @@ pub fn write_heatmap_png(
     top: f32,
     what: &str,
 ) -> Result<(), FilmError> {
+    let img = heatmap_image(values, w, h, top, what).map_err(|e| write_error(png, e))?;
+    img.save_with_format(png, image::ImageFormat::Png)
+        .map_err(|e| write_error(png, e))
+}
+
+/// The heat map of [`write_heatmap_png`] as a PNG file in memory (what a viewer shows).
+pub fn heatmap_png(
+    values: &[f32],
+    w: u32,
+    h: u32,
+    top: f32,
+    what: &str,
+) -> Result<Vec<u8>, FilmError> {
+    let img = heatmap_image(values, w, h, top, what)
+        .map_err(|e| FilmError::Options(format!("drawing the {what} map: {e}")))?;
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, image::ImageFormat::Png)
+        .map_err(|e| FilmError::Options(format!("encoding the {what} map: {e}")))?;
+    Ok(out.into_inner())
+}
+
+/// The map drawn with its colour bar, or why it could not be.
+fn heatmap_image(
+    values: &[f32],
+    w: u32,
+    h: u32,
+    top: f32,
+    what: &str,
+) -> Result<image::RgbImage, String> {
     if values.len() != w as usize * h as usize {
-        return Err(write_error(png, "map size does not match the image"));
+        return Err("map size does not match the image".into());
     }
-    plot_font::register().map_err(|e| write_error(png, e))?;
+    plot_font::register().map_err(|e| e.to_string())?;
     let (bw, bh) = (w + STRIP, h.max(160));
     let mut buf = vec![255u8; bw as usize * bh as usize * 3];
     let top = if top > 0.0 && top.is_finite() {
@@ -81,7 +110,7 @@ pub fn write_heatmap_png(
     let (x0, y0, y1) = (w as i32 + 16, 24i32, bh as i32 - 24);
     {
         let root = BitMapBackend::with_buffer(&mut buf, (bw, bh)).into_drawing_area();
-        let err = |e: DrawingAreaErrorKind<_>| write_error(png, e);
+        let err = |e: DrawingAreaErrorKind<_>| e.to_string();
         for y in y0..=y1 {
             let v = top * (y1 - y) as f32 / (y1 - y0) as f32;
             let [r, g, b] = colour(v);
@@ -109,10 +138,8 @@ pub fn write_heatmap_png(
             .map_err(err)?;
         root.present().map_err(err)?;
     }
-    let img = image::RgbImage::from_raw(bw, bh, buf)
-        .ok_or_else(|| write_error(png, "image size does not match the pixels"))?;
-    img.save_with_format(png, image::ImageFormat::Png)
-        .map_err(|e| write_error(png, e))
+    image::RgbImage::from_raw(bw, bh, buf)
+        .ok_or_else(|| "image size does not match the pixels".into())
 }
 
 /// Writes the `w` x `h` map `values` as a one-channel OpenEXR file, the channel named

@@ -160,6 +160,27 @@ impl Film {
             .then(|| display_difference(&self.tonemap, a.mean(p), b.mean(p)))
     }
 
+    /// Per channel, how far apart the two matrices' means of pixel `p` are on the display
+    /// (`std` maths; infinite when the pre-render was black and they differ), or `None` until
+    /// the pixel has samples in both.
+    pub fn difference(&self, p: usize) -> Option<[f32; 3]> {
+        let [a, b] = &self.matrices;
+        // `|` for the reason `error` gives.
+        if (a.count[p] == 0) | (b.count[p] == 0) {
+            return None;
+        }
+        let (x, y) = (a.mean(p), b.mean(p));
+        if self.tonemap.is_black() {
+            let d = if x == y { 0.0 } else { f32::INFINITY };
+            return Some([d; 3]);
+        }
+        let (x, y) = (self.tonemap.apply_exact(x), self.tonemap.apply_exact(y));
+        Some(std::array::from_fn(|c| {
+            let r = (x[c] - y[c]).abs();
+            if r.is_nan() { f32::INFINITY } else { r }
+        }))
+    }
+
     /// The estimate of pixel `p`: the mean of all its samples; the superpixel interpolation
     /// where the pixel is interpolated and not yet sampled in both matrices, or has no sample.
     pub fn pixel(&self, p: usize) -> [f32; 3] {

@@ -8,6 +8,7 @@ mod batch;
 mod heatmap;
 mod matrix;
 mod output;
+mod progressive;
 mod render;
 mod spare;
 mod superpixel;
@@ -21,8 +22,9 @@ use std::time::Duration;
 
 pub use accuracy::display_difference;
 pub use batch::{PacketIn, PacketOut, trace_each, trace_packets};
-pub use heatmap::{scale_top, write_heatmap_png, write_map_exr};
+pub use heatmap::{heatmap_png, scale_top, write_heatmap_png, write_map_exr};
 pub use matrix::{Film, ScreenMatrix, matrix_of};
+pub use progressive::Progressive;
 pub use render::render;
 pub use superpixel::Superpixels;
 pub use tracer::SampleTracer;
@@ -159,12 +161,14 @@ impl FilmOptions {
 pub enum StopReason {
     /// Uniform: every pass done.
     Done,
-    /// Adaptive: every pixel met the accuracy (or was interpolated).
+    /// Adaptive: every pixel met the accuracy.
     Accuracy,
     /// Adaptive: every pixel not meeting the accuracy reached the sample cap.
     SampleBudget,
     /// Adaptive: the time budget ran out.
     TimeBudget,
+    /// Stopped from outside before its end (a cancelled or abandoned progressive render).
+    Interrupted,
 }
 
 impl StopReason {
@@ -175,6 +179,7 @@ impl StopReason {
             StopReason::Accuracy => "every pixel met the accuracy",
             StopReason::SampleBudget => "stopped at the sample cap",
             StopReason::TimeBudget => "stopped at the time budget",
+            StopReason::Interrupted => "interrupted before its end",
         }
     }
 }
@@ -196,7 +201,12 @@ pub struct PassRecord {
     pub seconds: f64,
     /// Mean display difference of the two screen matrices over pixels sampled in both.
     pub error: f64,
-    /// Fraction of pixels done (met the accuracy, interpolated or at the sample cap).
+    /// The estimated RMS error of the image so far in display units, per channel as the
+    /// `aa` experiment measures it against a converged image: half the two matrices'
+    /// difference per pixel (each holds an independent half of its samples), and 1 for a
+    /// pixel not sampled in both yet.
+    pub estimate: f64,
+    /// Fraction of pixels done (met the accuracy or at the sample cap; uniform: sampled).
     pub done: f64,
     /// How close the samples of this pass's traced groups really are.
     pub coherence: Coherence,
@@ -249,6 +259,8 @@ pub enum FilmError {
     Options(String),
     #[error(transparent)]
     Backend(#[from] BackendError),
+    #[error("the render was cancelled")]
+    Cancelled,
     #[error("cannot write {}: {reason}", path.display())]
     Write { path: PathBuf, reason: String },
 }

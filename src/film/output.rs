@@ -5,7 +5,7 @@ use std::path::Path;
 
 use coherent_simd::Backend;
 
-use super::{FilmError, Rendered};
+use super::{Film, FilmError, Rendered};
 use crate::tonemap;
 
 fn write_error(path: &Path, reason: impl ToString) -> FilmError {
@@ -13,6 +13,39 @@ fn write_error(path: &Path, reason: impl ToString) -> FilmError {
         path: path.to_path_buf(),
         reason: reason.to_string(),
     }
+}
+
+impl Film {
+    /// The image as a display shows it (see [`Rendered::displayed`]), tone-mapped in
+    /// packets with `backend`: what a viewer shows after each pass.
+    pub fn displayed(&self, backend: Backend) -> Result<Vec<[f32; 3]>, FilmError> {
+        let mut image = tonemap::apply_image(backend, &self.tonemap, &self.estimate())?;
+        for px in &mut image {
+            for c in px.iter_mut() {
+                *c = if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) };
+            }
+        }
+        Ok(image)
+    }
+
+    /// The displayed image encoded as an sRGB PNG file, in memory.
+    pub fn png(&self, backend: Backend) -> Result<Vec<u8>, FilmError> {
+        let img = image::RgbImage::from_raw(
+            self.width,
+            self.height,
+            srgb_bytes(&self.displayed(backend)?),
+        )
+        .ok_or_else(|| FilmError::Options("image size does not match the pixels".into()))?;
+        let mut out = std::io::Cursor::new(Vec::new());
+        img.write_to(&mut out, image::ImageFormat::Png)
+            .map_err(|e| FilmError::Options(format!("encoding the PNG: {e}")))?;
+        Ok(out.into_inner())
+    }
+}
+
+/// sRGB-encoded bytes of display values, 3 per pixel.
+fn srgb_bytes(px: &[[f32; 3]]) -> Vec<u8> {
+    px.iter().flat_map(|c| c.map(tonemap::srgb8)).collect()
 }
 
 impl<S> Rendered<S> {
@@ -34,13 +67,7 @@ impl<S> Rendered<S> {
     /// Images are compared on these values (PSNR with peak 1), since channels above 1 are
     /// never shown.
     pub fn displayed(&self, backend: Backend) -> Result<Vec<[f32; 3]>, FilmError> {
-        let mut image = self.tone_mapped(backend)?;
-        for px in &mut image {
-            for c in px.iter_mut() {
-                *c = if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) };
-            }
-        }
-        Ok(image)
+        self.film.displayed(backend)
     }
 
     /// Writes the HDR radiance to an OpenEXR file.
@@ -106,13 +133,7 @@ pub fn write_exr_rgb(path: &Path, w: u32, h: u32, px: &[[f32; 3]]) -> Result<(),
 
 /// Writes display values in `[0, 1]`, sRGB encoded, to a PNG file.
 pub fn write_png_rgb(path: &Path, w: u32, h: u32, px: &[[f32; 3]]) -> Result<(), FilmError> {
-    let mut bytes = Vec::with_capacity(px.len() * 3);
-    for c in px {
-        for v in c {
-            bytes.push(tonemap::srgb8(*v));
-        }
-    }
-    let img = image::RgbImage::from_raw(w, h, bytes)
+    let img = image::RgbImage::from_raw(w, h, srgb_bytes(px))
         .ok_or_else(|| write_error(path, "image size does not match the pixels"))?;
     img.save_with_format(path, image::ImageFormat::Png)
         .map_err(|e| write_error(path, e))

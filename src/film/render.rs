@@ -7,6 +7,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use coherent_simd::{Backend, BackendError, MAX_LANES};
@@ -15,13 +16,12 @@ use rayon::prelude::*;
 use super::batch::{PacketIn, trace_packets};
 
 use super::matrix::{Film, FilmBand, FilmLines};
-use super::superpixel::Superpixels;
+use super::progressive::Progressive;
 use super::tracer::SampleTracer;
 use super::{
     Coherence, FilmError, FilmOptions, Fixups, Method, PassRecord, PassReport, Rendered, StopReason,
 };
 use crate::sampler::{HaltonTile, Span};
-use crate::tonemap::{Adaptation, ToneMap};
 
 /// Points traced per pre-render task.
 const POINTS_PER_TASK: usize = 256;
@@ -34,7 +34,8 @@ const POINTS_PER_TASK: usize = 256;
 /// 0.1 ms of work, so splitting down to a few tiles costs nothing measurable.
 const TILES_PER_JOB: usize = 4;
 
-/// Renders with the current rayon pool. The image is bit-identical for any thread count;
+/// Renders with the current rayon pool, pass after pass to the end: the pre-render, then
+/// [`Progressive::step`] until it stops. The image is bit-identical for any thread count;
 /// with [`Method::Uniform`] the set of samples (positions and ids) does not depend on the
 /// packet width either. `progress` is called after each pass (pass 0 is the pre-render).
 pub fn render<T: SampleTracer>(
@@ -43,153 +44,131 @@ pub fn render<T: SampleTracer>(
     opts: &FilmOptions,
     progress: &(dyn Fn(&PassReport) + Sync),
 ) -> Result<Rendered<T::Stats>, FilmError> {
-    opts.validate()?;
-    check_backend(backend)?;
-    let start = Instant::now();
-    let (w, h) = (opts.width, opts.height);
+    let mut p = Progressive::new(backend, tracer, opts)?;
+    progress(&p.report());
+    while p.step()?.is_some() {
+        progress(&p.report());
+    }
+    Ok(p.finish())
+}
+
+/// What the passes after the pre-render share: the tiles, the spans, where the next pass's
+/// sample indices start and, when adaptive, which pixels still need rays.
+pub(super) struct PassState {
+    tiles: Vec<(u32, u32)>,
+    levels: Vec<Span>,
+    id_base: u64,
+    rays: u64,
+    next_index: u64,
+    pass: u32,
+    /// After a pass: which pixels need rays and whether any stopped at the cap unconverged.
+    pending: Option<(Vec<bool>, bool)>,
+}
+
+impl PassState {
+    /// The state after the pre-render, which traced `pre_rays` points (their ids come first).
+    pub(super) fn new(opts: &FilmOptions, pre_rays: u64) -> PassState {
+        let (w, h, tile) = (opts.width, opts.height, opts.tile);
+        PassState {
+            tiles: (0..h.div_ceil(tile.height()))
+                .flat_map(|ty| (0..w.div_ceil(tile.width())).map(move |tx| (tx, ty)))
+                .collect(),
+            levels: Span::levels(tile),
+            id_base: pre_rays,
+            rays: pre_rays,
+            next_index: 0,
+            pass: 0,
+            pending: None,
+        }
+    }
+}
+
+/// Why no pass was traced: the render stopped, or the pass failed (or was cancelled).
+pub(super) type NoPass = Result<StopReason, FilmError>;
+
+/// Plans and traces the next pass into `film`, and records it.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn run_pass<T: SampleTracer>(
+    backend: Backend,
+    tracer: &T,
+    opts: &FilmOptions,
+    film: &mut Film,
+    st: &mut PassState,
+    start: Instant,
+    cancel: Option<&AtomicBool>,
+    fixups: &mut Fixups,
+    stats: &mut T::Stats,
+) -> Result<PassRecord, NoPass> {
+    let (w, h, tile) = (opts.width, opts.height, opts.tile);
     let lanes = backend.lanes();
-    let mut stats = T::Stats::default();
-    let mut fixups = Fixups::default();
-
-    // Pre-render: the superpixel corners (tone-mapping adaptation, interpolation).
-    let mut sp = Superpixels::new(w, h, opts.superpixel.0, opts.superpixel.1);
-    let points = sp.corner_positions();
-    let (colors, s) = trace_points(backend, tracer, &points)?;
-    T::merge_stats(&mut stats, s);
-    for (c, v) in sp.corners.iter_mut().zip(colors) {
-        *c = fix(v, &mut fixups);
-    }
-    let adaptation = Adaptation::from_luminances(sp.corners.iter().map(|c| luminance(*c)));
-    let tonemap = ToneMap::new(opts.tonemap, adaptation, opts.display);
-    let id_base = points.len() as u64;
-    let mut rays = points.len() as u64;
-
-    let mut film = Film::new(w, h, sp, tonemap);
-    if let Method::Adaptive { accuracy, .. } = opts.method {
-        mark_interpolated(&mut film, accuracy);
-    }
-    let mut passes = Vec::new();
-    let mut record = PassRecord {
-        pass: 0,
-        span: Span { k: 0, n: 0 },
-        radius: f64::NAN,
-        rays,
-        rays_this_pass: rays,
-        groups_traced: points.len().div_ceil(lanes) as u64,
-        groups_skipped: 0,
+    let (span, begin, end, need) = plan_pass(opts, film, start, st, lanes).map_err(Ok)?;
+    st.next_index = end;
+    st.pass += 1;
+    // Every tile traces the same indices of its own Halton sequence, and where a sample
+    // falls in its tile depends on the index alone: worked out once per pass, not once
+    // per tile (the digit loops took 8 ms of a 1024 x 768 frame at 16 lanes, one core).
+    let places: Vec<Place> = (begin..end).map(|i| Place::new(tile, i)).collect();
+    let job = PassJob {
+        origin: (0, 0),
+        width: w,
+        height: h,
+        begin,
+        end,
+        span,
+        need: need.as_deref(),
+        places: &places,
+        id_base: st.id_base,
+        tile: (tile.width(), tile.height()),
+        lines: film.lines(),
+    };
+    let outs = trace_tiles(backend, tracer, film, &st.tiles, &job, cancel).map_err(Err)?;
+    let sums = PassSums::of(outs, fixups, stats, T::merge_stats);
+    st.rays += sums.rays;
+    let errors = pixel_errors(film);
+    let done = match opts.method {
+        Method::Adaptive {
+            accuracy,
+            max_samples_per_pixel,
+            ..
+        } => {
+            let (need, capped) = needed(film, &errors.max, accuracy, max_samples_per_pixel);
+            let done = need.iter().filter(|n| !**n).count() as f64 / film.pixels() as f64;
+            st.pending = Some((need, capped));
+            done
+        }
+        Method::Uniform { .. } => covered_fraction(film),
+    };
+    Ok(PassRecord {
+        pass: st.pass,
+        span,
+        radius: span.radius(tile),
+        rays: st.rays,
+        rays_this_pass: sums.rays,
+        groups_traced: sums.traced,
+        groups_skipped: sums.skipped,
         seconds: start.elapsed().as_secs_f64(),
-        error: f64::NAN,
-        done: covered_fraction(&film),
-        coherence: Coherence::default(),
-    };
-    progress(&PassReport {
-        record: record.clone(),
-        film: &film,
-    });
-    passes.push(record.clone());
-
-    let tile = opts.tile;
-    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(tile.height()))
-        .flat_map(|ty| (0..w.div_ceil(tile.width())).map(move |tx| (tx, ty)))
-        .collect();
-    let levels = Span::levels(tile);
-    let mut next_index = 0u64;
-    let mut pass = 0u32;
-    let mut pending: Option<(Vec<bool>, bool)> = None;
-    let stop = loop {
-        // What this pass traces: an index range, its span, and which pixels still need rays.
-        let (span, begin, end, need) = match plan_pass(
-            opts,
-            &film,
-            start,
-            pass,
-            next_index,
-            lanes,
-            &levels,
-            &mut pending,
-        ) {
-            Ok(plan) => plan,
-            Err(stop) => break stop,
-        };
-        next_index = end;
-        pass += 1;
-        // Every tile traces the same indices of its own Halton sequence, and where a sample
-        // falls in its tile depends on the index alone: worked out once per pass, not once
-        // per tile (the digit loops took 8 ms of a 1024 x 768 frame at 16 lanes, one core).
-        let places: Vec<Place> = (begin..end).map(|i| Place::new(tile, i)).collect();
-
-        let job = PassJob {
-            origin: (0, 0),
-            width: w,
-            height: h,
-            begin,
-            end,
-            span,
-            need: need.as_deref(),
-            places: &places,
-            id_base,
-            tile: (tile.width(), tile.height()),
-            lines: film.lines(),
-        };
-        let outs = trace_tiles(backend, tracer, &mut film, &tiles, &job)?;
-        let PassSums {
-            rays: this_pass,
-            traced,
-            skipped,
-            coherence: coh,
-        } = PassSums::of(outs, &mut fixups, &mut stats, T::merge_stats);
-        rays += this_pass;
-        let done = pass_done(opts, &film, &mut pending);
-        record = PassRecord {
-            pass,
-            span,
-            radius: span.radius(tile),
-            rays,
-            rays_this_pass: this_pass,
-            groups_traced: traced,
-            groups_skipped: skipped,
-            seconds: start.elapsed().as_secs_f64(),
-            error: mean_error(&film),
-            done,
-            coherence: coh,
-        };
-        progress(&PassReport {
-            record: record.clone(),
-            film: &film,
-        });
-        passes.push(record.clone());
-    };
-
-    Ok(Rendered {
-        film,
-        adaptation,
-        tonemap,
-        rays,
-        passes,
-        stats,
-        fixups,
-        stop,
+        error: errors.mean,
+        estimate: errors.estimate,
+        done,
+        coherence: sums.coherence,
     })
 }
 
 /// A pass's span, its range of sample indices and, when adaptive, which pixels need rays.
 type PassPlan = (Span, u64, u64, Option<Vec<bool>>);
 
-/// What pass `pass` traces: its span, the range of sample indices from `next_index` and, when
-/// adaptive, which pixels still need rays (from `pending`, the previous pass's, when it has
-/// it); or why the render stops before it.
-#[allow(clippy::too_many_arguments)]
+/// What the next pass traces: its span, the range of sample indices from the state's next
+/// index and, when adaptive, which pixels still need rays (the previous pass's answer, when
+/// it has one); or why the render stops before it.
 fn plan_pass(
     opts: &FilmOptions,
     film: &Film,
     start: Instant,
-    pass: u32,
-    next_index: u64,
+    st: &mut PassState,
     lanes: usize,
-    levels: &[Span],
-    pending: &mut Option<(Vec<bool>, bool)>,
 ) -> Result<PassPlan, StopReason> {
     let tile = opts.tile;
+    let pass = st.pass;
     match opts.method {
         Method::Uniform { spp } => {
             if pass == spp {
@@ -207,9 +186,14 @@ fn plan_pass(
                 return Err(StopReason::TimeBudget);
             }
             // Which pixels need rays: computed once per pass (after the previous one).
-            let (need, capped) = pending
-                .take()
-                .unwrap_or_else(|| needed(film, accuracy, max_samples_per_pixel));
+            let (need, capped) = st.pending.take().unwrap_or_else(|| {
+                needed(
+                    film,
+                    &pixel_errors(film).max,
+                    accuracy,
+                    max_samples_per_pixel,
+                )
+            });
             if !need.iter().any(|&n| n) {
                 return Err(if capped {
                     StopReason::SampleBudget
@@ -217,28 +201,10 @@ fn plan_pass(
                     StopReason::Accuracy
                 });
             }
-            let span = levels[(pass as usize).min(levels.len() - 1)];
-            let b = next_index;
+            let span = st.levels[(pass as usize).min(st.levels.len() - 1)];
+            let b = st.next_index;
             Ok((span, b, b + span.value() * lanes as u64, Some(need)))
         }
-    }
-}
-
-/// The fraction of the image done after a pass. When adaptive, also which pixels still need
-/// rays, kept in `pending` for the next pass's plan.
-fn pass_done(opts: &FilmOptions, film: &Film, pending: &mut Option<(Vec<bool>, bool)>) -> f64 {
-    match opts.method {
-        Method::Adaptive {
-            accuracy,
-            max_samples_per_pixel,
-            ..
-        } => {
-            let (need, capped) = needed(film, accuracy, max_samples_per_pixel);
-            let done = need.iter().filter(|n| !**n).count() as f64 / film.pixels() as f64;
-            *pending = Some((need, capped));
-            done
-        }
-        Method::Uniform { .. } => covered_fraction(film),
     }
 }
 
@@ -252,6 +218,7 @@ fn trace_tiles<T: SampleTracer>(
     film: &mut Film,
     tiles: &[(u32, u32)],
     job: &PassJob<'_>,
+    cancel: Option<&AtomicBool>,
 ) -> Result<Vec<TileOut<T::Stats>>, FilmError> {
     let (tw, th) = job.tile;
     let bands: Vec<Mutex<FilmBand<'_>>> = film.bands(th).into_iter().map(Mutex::new).collect();
@@ -259,18 +226,21 @@ fn trace_tiles<T: SampleTracer>(
         .par_iter()
         .with_max_len(TILES_PER_JOB)
         .map(|&(tx, ty)| {
+            if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+                return Err(FilmError::Cancelled);
+            }
             let job = PassJob {
                 origin: (tx * tw, ty * th),
                 ..*job
             };
-            pass_tile(backend, tracer, &job, &bands[ty as usize])
+            Ok(pass_tile(backend, tracer, &job, &bands[ty as usize])?)
         })
         .collect::<Result<Vec<_>, _>>()?;
     Ok(outs)
 }
 
 /// A backend this CPU cannot run, as the film's error.
-fn check_backend(backend: Backend) -> Result<(), FilmError> {
+pub(super) fn check_backend(backend: Backend) -> Result<(), FilmError> {
     match backend.unavailable_reason() {
         None => Ok(()),
         Some(reason) => Err(FilmError::Backend(
@@ -336,13 +306,13 @@ impl PassSums {
 }
 
 #[inline]
-fn luminance(c: [f32; 3]) -> f32 {
+pub(super) fn luminance(c: [f32; 3]) -> f32 {
     0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 }
 
 /// Sets NaN/infinite and negative channels to 0, counting the samples fixed.
 #[inline]
-fn fix(mut c: [f32; 3], f: &mut Fixups) -> [f32; 3] {
+pub(super) fn fix(mut c: [f32; 3], f: &mut Fixups) -> [f32; 3] {
     if c.iter().any(|v| !v.is_finite()) {
         f.non_finite += 1;
         for v in &mut c {
@@ -361,7 +331,7 @@ fn fix(mut c: [f32; 3], f: &mut Fixups) -> [f32; 3] {
 }
 
 /// Marks the pixels of superpixels whose corners agree within `accuracy`.
-fn mark_interpolated(film: &mut Film, accuracy: f32) {
+pub(super) fn mark_interpolated(film: &mut Film, accuracy: f32) {
     let sp = &film.superpixels;
     for v in 0..sp.ny {
         for u in 0..sp.nx {
@@ -377,22 +347,85 @@ fn mark_interpolated(film: &mut Film, accuracy: f32) {
     }
 }
 
-/// Which pixels need more rays, and whether any stopped at the sample cap unconverged. A
-/// pixel is done when it is interpolated, or when it and every neighbour of its 3x3
-/// neighbourhood sampled in both matrices have a matrix difference within `accuracy`
-/// (neighbours make edges robust: two estimates of an edge pixel may agree by chance).
-/// Rows in parallel; the answer does not depend on the threads.
-fn needed(film: &Film, accuracy: f32, cap: u32) -> (Vec<bool>, bool) {
-    let w = film.width;
-    let errors: Vec<Option<f32>> = (0..film.pixels())
+/// The two matrices' disagreement after a pass.
+pub(super) struct PixelErrors {
+    /// Per pixel, the largest channel difference of the two matrices on the display; `None`
+    /// until the pixel is sampled in both.
+    max: Vec<Option<f32>>,
+    /// The mean of `max` over the pixels sampled in both (NaN when none is).
+    pub(super) mean: f64,
+    /// The estimated RMS display error of the image so far ([`PassRecord::estimate`]).
+    pub(super) estimate: f64,
+}
+
+/// Each pixel's disagreement and the image's error estimate: rows in parallel, their sums
+/// added in row order (the same figures for any thread count).
+///
+/// Each matrix holds an independent estimate of about half the pixel's samples, so the
+/// difference of the two has twice the variance of one and four times that of their mean:
+/// half the difference estimates the error of the pixel as displayed. A pixel not sampled in
+/// both says nothing about its error; it counts as the largest (1 per channel), so the
+/// estimate bounds what is not known yet instead of leaving it out.
+pub(super) fn pixel_errors(film: &Film) -> PixelErrors {
+    let w = film.width as usize;
+    let rows: Vec<(Vec<Option<f32>>, f64, u64, f64)> = (0..film.height as usize)
         .into_par_iter()
-        .map(|p| film.error(p))
+        .map(|y| {
+            let mut max = Vec::with_capacity(w);
+            let (mut sum, mut n, mut squares) = (0.0f64, 0u64, 0.0f64);
+            for p in y * w..(y + 1) * w {
+                match film.difference(p) {
+                    Some(d) => {
+                        let m = d.iter().fold(0.0f32, |a, &v| a.max(v));
+                        max.push(Some(m));
+                        sum += m.min(1e6) as f64;
+                        n += 1;
+                        squares += d
+                            .iter()
+                            .map(|&v| (v.min(1.0) as f64 / 2.0).powi(2))
+                            .sum::<f64>();
+                    }
+                    None => {
+                        max.push(None);
+                        squares += 3.0;
+                    }
+                }
+            }
+            (max, sum, n, squares)
+        })
         .collect();
+    let mut out = PixelErrors {
+        max: Vec::with_capacity(film.pixels()),
+        mean: 0.0,
+        estimate: 0.0,
+    };
+    let (mut sum, mut n, mut squares) = (0.0f64, 0u64, 0.0f64);
+    for (max, s, k, q) in rows {
+        out.max.extend(max);
+        sum += s;
+        n += k;
+        squares += q;
+    }
+    out.mean = if n == 0 { f64::NAN } else { sum / n as f64 };
+    out.estimate = (squares / (3 * film.pixels().max(1)) as f64).sqrt();
+    out
+}
+
+/// Which pixels need more rays, and whether any stopped at the sample cap unconverged. A
+/// pixel is done when it and every neighbour of its 3x3 neighbourhood sampled in both
+/// matrices have a matrix difference within `accuracy` (neighbours make edges robust: two
+/// estimates of an edge pixel may agree by chance). A pixel of an interpolated superpixel is
+/// no exception: its corners may agree while something smaller than the superpixel lies
+/// between them (a full-size `aa` room lost most of its error there), so interpolation is
+/// the first image, not a verdict. Rows in parallel; the answer does not depend on the
+/// threads.
+fn needed(film: &Film, errors: &[Option<f32>], accuracy: f32, cap: u32) -> (Vec<bool>, bool) {
+    let w = film.width;
     let mut need = vec![false; film.pixels()];
     let capped = need
         .par_chunks_mut(w as usize)
         .enumerate()
-        .map(|(y, row)| needed_row(film, &errors, accuracy, cap, y as u32, row))
+        .map(|(y, row)| needed_row(film, errors, accuracy, cap, y as u32, row))
         .reduce(|| false, |a, b| a | b);
     (need, capped)
 }
@@ -411,9 +444,6 @@ fn needed_row(
     let mut capped = false;
     for x in 0..w {
         let p = (y * w + x) as usize;
-        if film.interpolated[p] {
-            continue;
-        }
         let met = errors[p].is_some() && {
             let mut e = 0.0f32;
             for ny in y.saturating_sub(1)..(y + 2).min(h) {
@@ -437,31 +467,8 @@ fn needed_row(
     capped
 }
 
-/// The mean display difference of the pixels sampled in both matrices: rows in parallel,
-/// their sums added in row order (the same figure for any thread count).
-fn mean_error(film: &Film) -> f64 {
-    let w = film.width as usize;
-    let rows: Vec<(f64, u64)> = (0..film.height as usize)
-        .into_par_iter()
-        .map(|y| {
-            let (mut s, mut n) = (0.0f64, 0u64);
-            for p in y * w..(y + 1) * w {
-                if let Some(e) = film.error(p) {
-                    s += e.min(1e6) as f64;
-                    n += 1;
-                }
-            }
-            (s, n)
-        })
-        .collect();
-    let (s, n) = rows
-        .iter()
-        .fold((0.0f64, 0u64), |(s, n), &(rs, rn)| (s + rs, n + rn));
-    if n == 0 { f64::NAN } else { s / n as f64 }
-}
-
 /// Fraction of pixels sampled or interpolated (the `done` of pre-render and uniform passes).
-fn covered_fraction(film: &Film) -> f64 {
+pub(super) fn covered_fraction(film: &Film) -> f64 {
     // In chunks, without branches (the compiler vectorises the count).
     const CHUNK: usize = 1 << 14;
     let [a, b] = &film.matrices;
@@ -657,7 +664,7 @@ fn pass_tile<T: SampleTracer>(
 }
 
 /// Traces points (the pre-render) in packets, in parallel, in order; ids are the indices.
-fn trace_points<T: SampleTracer>(
+pub(super) fn trace_points<T: SampleTracer>(
     backend: Backend,
     tracer: &T,
     points: &[(f32, f32)],

@@ -157,6 +157,25 @@ impl<'s, A: Accel> Renderer<'s, A> {
         &self.camera
     }
 
+    /// Looks through `camera` at a `width` x `height` image from now on, keeping the
+    /// accelerator and the shading tables (a viewer's camera moves without a rebuild).
+    pub fn set_view(
+        &mut self,
+        camera: &crate::scene::camera::Camera,
+        width: u32,
+        height: u32,
+    ) -> Result<(), CameraError> {
+        let c = camera;
+        self.camera = PinholeCamera::new(c.position, c.look_at, c.up, c.vfov_deg, width, height)?;
+        self.width = width;
+        Ok(())
+    }
+
+    /// Hands the accelerator back (a viewer that changes it builds a new renderer).
+    pub fn into_accel(self) -> A {
+        self.accel
+    }
+
     /// Radiance through the image points `(xs, ys)` of the active lanes (inactive lanes give
     /// zero); `ids` are the samples' ids (random numbers derive from them). NaN lanes are
     /// counted in `stats.nan` and zeroed.
