@@ -28,7 +28,9 @@ use std::sync::OnceLock;
 
 use coherent::accel_any::{AccelKind, AnyAccel, AnyParams};
 use coherent_accel::shapes::Rng;
-use coherent_accel::testing::{one_triangle, random_rays, random_scene, same_t};
+use coherent_accel::testing::{
+    on_tested_backends, one_triangle, random_rays, random_scene, same_t,
+};
 use coherent_accel::{Accel, BruteForce, EDGE_EPS, Hit1, Ray1, Rays, Scene};
 use coherent_bsp::{Bsp, BspParams};
 use coherent_simd::{Backend, Kernel, Lanes, Only, SimdMask};
@@ -502,50 +504,31 @@ fn on<const BITS: u32, K: Kernel<Output = Result<(), String>>>(b: Backend, k: K)
     }
 }
 
-/// Stamps the tests out for one accelerator and one lane backend.
-macro_rules! accel_tests {
-    ($name:ident, $which:expr, $backend:expr) => {
+/// Stamps the tests out for one accelerator, each running on every backend the traversal
+/// tests cover (`Backend::TRAVERSAL_TESTED`).
+macro_rules! accel_backends {
+    ($name:ident, $which:expr) => {
         mod $name {
             use super::*;
-            const B: Backend = $backend;
 
             #[test]
             fn edge_cases() {
-                on::<{ B.bit() }, _>(B, EdgeCases($which));
+                on_tested_backends(|| EdgeCases($which)).unwrap();
             }
 
             #[test]
             fn real_meshes() {
-                on::<{ B.bit() }, _>(B, RealMeshes($which));
+                on_tested_backends(|| RealMeshes($which)).unwrap();
             }
 
             proptest! {
                 #![proptest_config(ProptestConfig::with_cases(6))]
                 #[test]
                 fn random_scenes(seed in any::<u64>(), tris in 1usize..250, meshes in 1usize..4, instances in 0usize..6) {
-                    on::<{ B.bit() }, _>(B, RandomScene { which: $which, seed, tris, meshes, instances });
+                    on_tested_backends(|| RandomScene { which: $which, seed, tris, meshes, instances })
+                        .map_err(TestCaseError::fail)?;
                 }
             }
-        }
-    };
-}
-
-/// Every lane backend for one accelerator.
-macro_rules! accel_backends {
-    ($name:ident, $which:expr) => {
-        mod $name {
-            use super::*;
-            accel_tests!(scalar, $which, Backend::Scalar);
-            accel_tests!(sse, $which, Backend::Sse);
-            // On x86-64, wide4 and wide8 give sse's and avx2's answers bit for bit (the lane
-            // test): one copy of every traversal per width is enough.
-            #[cfg(not(target_arch = "x86_64"))]
-            accel_tests!(wide4, $which, Backend::Wide4);
-            #[cfg(not(target_arch = "x86_64"))]
-            accel_tests!(wide8, $which, Backend::Wide8);
-            accel_tests!(wide16, $which, Backend::Wide16);
-            accel_tests!(avx2, $which, Backend::Avx2);
-            accel_tests!(avx512, $which, Backend::Avx512);
         }
     };
 }

@@ -4,11 +4,48 @@
 //! bounds), and checks of every query, single-ray and packet, with the tie rule of the
 //! [`Accel`] contract. Used by the BSP's tests; any other accelerator can use them too.
 
-use coherent_simd::{Lanes, SimdMask};
+use coherent_simd::{Backend, Kernel, Lanes, Only, SimdMask};
 use glam::{Affine3A, Quat, Vec3};
 
 use crate::shapes::{Rng, soup};
 use crate::{Accel, BruteForce, Hit1, Instance, Ray1, Rays, Scene};
+
+/// What a test kernel gives: nothing (it asserts) or an error to report.
+pub trait Outcome {
+    fn result(self) -> Result<(), String>;
+}
+
+impl Outcome for () {
+    fn result(self) -> Result<(), String> {
+        Ok(())
+    }
+}
+
+impl Outcome for Result<(), String> {
+    fn result(self) -> Result<(), String> {
+        self
+    }
+}
+
+/// Runs the kernel `mk` makes on every backend of [`Backend::TRAVERSAL_TESTED`] (the one
+/// list of backends the traversal tests cover), skipping with a message those this machine
+/// cannot run. The kernel is compiled only for that set (`Only`). A failure names its
+/// backend (a kernel that asserts: the last "backend" line of the test's output).
+pub fn on_tested_backends<K: Kernel<Output: Outcome>>(mk: impl Fn() -> K) -> Result<(), String> {
+    for b in Backend::TRAVERSAL_TESTED {
+        match b.unavailable_reason() {
+            Some(why) => eprintln!("skipping backend {}: {why}", b.name()),
+            None => {
+                eprintln!("backend {}", b.name());
+                b.run(Only::<K, { Backend::TRAVERSAL_TESTED_BITS }>(mk()))
+                    .map_err(|e| e.to_string())?
+                    .result()
+                    .map_err(|e| format!("backend {}: {e}", b.name()))?
+            }
+        }
+    }
+    Ok(())
+}
 
 /// A random scene: `meshes` soups of about `tris` triangles in total (with some planar,
 /// axis-aligned and degenerate triangles), placed by `instances` instances (identity or

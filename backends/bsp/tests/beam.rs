@@ -5,7 +5,7 @@
 use coherent_accel::testing::*;
 use coherent_accel::{Accel, Hits, Ray1, Rays, Scene};
 use coherent_bsp::{Bsp, BspParams, TraversalStats};
-use coherent_simd::{Backend, Kernel, Lanes, Only, SimdMask};
+use coherent_simd::{Kernel, Lanes, SimdMask};
 use glam::Vec3;
 use proptest::prelude::*;
 
@@ -262,62 +262,36 @@ fn cases() -> u32 {
         .unwrap_or(24)
 }
 
-/// Runs `k` on backend `b`, or says why it is skipped (`None`). `k` is compiled only for the
-/// backends of the set `BITS` (`Only`): a stamped backend's test compiles one copy of it.
-fn on<const BITS: u32, K: Kernel>(b: Backend, k: K) -> Option<K::Output> {
-    match b.unavailable_reason() {
-        Some(why) => {
-            eprintln!("skipping backend {}: {why}", b.name());
-            None
+/// Every beam check on every backend the traversal tests cover.
+mod on_backends {
+    use super::*;
+
+    #[test]
+    fn basics() {
+        on_tested_backends(|| Basics).unwrap();
+    }
+
+    #[test]
+    fn hand_counted() {
+        on_tested_backends(|| HandCounted).unwrap();
+    }
+
+    // The beam code is generic over the width; each backend of the tested list compiles every
+    // beam walk again (the lane trait itself is checked on every backend by
+    // `backends/simd/tests/lanes.rs`).
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: cases(), ..ProptestConfig::default() })]
+
+        #[test]
+        fn random_beams_match_brute_force(
+            seed in any::<u64>(),
+            tris in 1usize..400,
+            meshes in 1usize..4,
+            instances in 0usize..7,
+            side in prop::sample::select(vec![1usize, 3, 8, 16, 24]),
+        ) {
+            on_tested_backends(|| RandomBeams { seed, tris, meshes, instances, side })
+                .map_err(TestCaseError::fail)?;
         }
-        None => Some(b.run(Only::<K, BITS>(k)).unwrap()),
     }
 }
-
-/// Stamps the tests out for one lane backend.
-macro_rules! beam_tests {
-    ($name:ident, $backend:expr) => {
-        mod $name {
-            use super::*;
-            const B: Backend = $backend;
-
-            #[test]
-            fn basics() {
-                on::<{ B.bit() }, _>(B, Basics);
-            }
-
-            #[test]
-            fn hand_counted() {
-                on::<{ B.bit() }, _>(B, HandCounted);
-            }
-
-            proptest! {
-                #![proptest_config(ProptestConfig { cases: cases(), ..ProptestConfig::default() })]
-
-                #[test]
-                fn random_beams_match_brute_force(
-                    seed in any::<u64>(),
-                    tris in 1usize..400,
-                    meshes in 1usize..4,
-                    instances in 0usize..7,
-                    side in prop::sample::select(vec![1usize, 3, 8, 16, 24]),
-                ) {
-                    let k = RandomBeams { seed, tris, meshes, instances, side };
-                    if let Some(r) = on::<{ B.bit() }, _>(B, k) {
-                        r.map_err(TestCaseError::fail)?;
-                    }
-                }
-            }
-        }
-    };
-}
-
-// Every width (1, 4, 8, 16) on the hand-written backends, and 16 lanes on `wide` for the
-// machines without AVX-512. The beam code is generic over the width; each stamped backend
-// compiles every beam walk again, so the list stays short (the lane trait itself is checked
-// on every backend by `backends/simd/tests/lanes.rs`).
-beam_tests!(scalar, Backend::Scalar);
-beam_tests!(sse, Backend::Sse);
-beam_tests!(avx2, Backend::Avx2);
-beam_tests!(avx512, Backend::Avx512);
-beam_tests!(wide16, Backend::Wide16);

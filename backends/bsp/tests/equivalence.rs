@@ -8,7 +8,7 @@ use std::sync::OnceLock;
 use coherent_accel::testing::*;
 use coherent_accel::{Accel, BruteForce, Mesh, Ray1, Rays, Scene};
 use coherent_bsp::{Bsp, BspParams, BuildPreset, SahParams};
-use coherent_simd::{Backend, Kernel, Lanes, Only, SimdMask};
+use coherent_simd::{Kernel, Lanes, SimdMask};
 use glam::Vec3;
 use proptest::prelude::*;
 
@@ -416,91 +416,56 @@ fn cases() -> u32 {
         .unwrap_or(24)
 }
 
-/// Runs `k` on backend `b`, or says why it is skipped (`None`). `k` is compiled only for the
-/// backends of the set `BITS` (`Only`): a stamped backend's test compiles one copy of it.
-fn on<const BITS: u32, K: Kernel>(b: Backend, k: K) -> Option<K::Output> {
-    match b.unavailable_reason() {
-        Some(why) => {
-            eprintln!("skipping backend {}: {why}", b.name());
-            None
+/// Every traversal check on every backend the traversal tests cover.
+mod on_backends {
+    use super::*;
+
+    #[test]
+    fn edge_cases() {
+        on_tested_backends(|| EdgeCases).unwrap();
+    }
+
+    #[test]
+    fn large_scene() {
+        on_tested_backends(|| LargeScene).unwrap();
+    }
+
+    #[test]
+    fn regressions() {
+        on_tested_backends(|| Regressions).unwrap();
+    }
+
+    #[test]
+    fn moving_instances() {
+        on_tested_backends(|| MovingInstances).unwrap();
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: cases(), ..ProptestConfig::default() })]
+
+        #[test]
+        fn random_scenes_match_brute_force(
+            seed in any::<u64>(),
+            tris in 1usize..400,
+            meshes in 1usize..4,
+            instances in 0usize..7,
+            preset in 0usize..PARAM_SETS,
+        ) {
+            on_tested_backends(|| RandomScene { seed, tris, meshes, instances, preset, hard: false })
+                .map_err(TestCaseError::fail)?;
         }
-        None => Some(b.run(Only::<K, BITS>(k)).unwrap()),
+
+        #[test]
+        fn hard_scenes_match_brute_force(
+            seed in any::<u64>(),
+            tris in 1usize..600,
+            preset in 0usize..PARAM_SETS,
+        ) {
+            on_tested_backends(|| RandomScene { seed, tris, meshes: 1, instances: 0, preset, hard: true })
+                .map_err(TestCaseError::fail)?;
+        }
     }
 }
-
-/// Stamps the tests out for one lane backend.
-macro_rules! bsp_tests {
-    ($name:ident, $backend:expr) => {
-        mod $name {
-            use super::*;
-            const B: Backend = $backend;
-
-            #[test]
-            fn edge_cases() {
-                on::<{ B.bit() }, _>(B, EdgeCases);
-            }
-
-            #[test]
-            fn large_scene() {
-                on::<{ B.bit() }, _>(B, LargeScene);
-            }
-
-            #[test]
-            fn regressions() {
-                on::<{ B.bit() }, _>(B, Regressions);
-            }
-
-            #[test]
-            fn moving_instances() {
-                on::<{ B.bit() }, _>(B, MovingInstances);
-            }
-
-            proptest! {
-                #![proptest_config(ProptestConfig { cases: cases(), ..ProptestConfig::default() })]
-
-                #[test]
-                fn random_scenes_match_brute_force(
-                    seed in any::<u64>(),
-                    tris in 1usize..400,
-                    meshes in 1usize..4,
-                    instances in 0usize..7,
-                    preset in 0usize..PARAM_SETS,
-                ) {
-                    let k = RandomScene { seed, tris, meshes, instances, preset, hard: false };
-                    if let Some(r) = on::<{ B.bit() }, _>(B, k) {
-                        r.map_err(TestCaseError::fail)?;
-                    }
-                }
-
-                #[test]
-                fn hard_scenes_match_brute_force(
-                    seed in any::<u64>(),
-                    tris in 1usize..600,
-                    preset in 0usize..PARAM_SETS,
-                ) {
-                    let k = RandomScene { seed, tris, meshes: 1, instances: 0, preset, hard: true };
-                    if let Some(r) = on::<{ B.bit() }, _>(B, k) {
-                        r.map_err(TestCaseError::fail)?;
-                    }
-                }
-            }
-        }
-    };
-}
-
-bsp_tests!(scalar, Backend::Scalar);
-bsp_tests!(sse, Backend::Sse);
-// On x86-64, sse and avx2 have these widths, and `wide` gives scalar's answer bit for bit
-// (backends/simd/tests/lanes.rs): the traversal at 4 and 8 lanes is checked there, and these
-// two copies of it would only double the build. aarch64 has no other backend at 8 lanes.
-#[cfg(not(target_arch = "x86_64"))]
-bsp_tests!(wide4, Backend::Wide4);
-#[cfg(not(target_arch = "x86_64"))]
-bsp_tests!(wide8, Backend::Wide8);
-bsp_tests!(wide16, Backend::Wide16);
-bsp_tests!(avx2, Backend::Avx2);
-// 16 lanes on wide16, which every machine runs; avx512 gives wide16's answers bit for bit
-// (the lane test), and its traversal meets brute force in `tests/accel_equivalence.rs`.
 
 #[test]
 fn param_sets_are_counted() {

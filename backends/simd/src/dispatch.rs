@@ -126,6 +126,11 @@ struct Info {
     estimates: bool,
     /// The instruction set its code is compiled for, in this build.
     instructions: &'static str,
+    /// The traversal tests (every accelerator against brute force, the BSP's own and its
+    /// beams') run on it: [`Backend::TRAVERSAL_TESTED`]. Each backend there compiles every
+    /// traversal once more, so a backend whose answers another one already gives bit for bit
+    /// (the lane tests check that) is left out.
+    traversal_tested: bool,
 }
 
 const X86: bool = cfg!(target_arch = "x86_64");
@@ -163,6 +168,7 @@ const INFO: [Info; 11] = [
         } else {
             "SSE2 scalar (the x86-64 baseline)"
         },
+        traversal_tested: true,
     },
     Info {
         backend: Backend::Sse,
@@ -179,6 +185,7 @@ const INFO: [Info; 11] = [
         cpu: Cpu::Baseline,
         estimates: true,
         instructions: "SSE2 (the x86-64 baseline)",
+        traversal_tested: true,
     },
     Info {
         backend: Backend::Wide4,
@@ -195,6 +202,9 @@ const INFO: [Info; 11] = [
         cpu: Cpu::Baseline,
         estimates: X86,
         instructions: WIDE_INSTRUCTIONS,
+        // On x86-64 sse gives its answers bit for bit; aarch64 has no other 4-lane backend
+        // compiled everywhere.
+        traversal_tested: !X86,
     },
     Info {
         backend: Backend::Wide8,
@@ -211,6 +221,8 @@ const INFO: [Info; 11] = [
         cpu: Cpu::Baseline,
         estimates: X86,
         instructions: WIDE_INSTRUCTIONS,
+        // On x86-64 avx2 gives its answers bit for bit.
+        traversal_tested: !X86,
     },
     Info {
         backend: Backend::Wide16,
@@ -227,6 +239,8 @@ const INFO: [Info; 11] = [
         cpu: Cpu::Baseline,
         estimates: X86,
         instructions: WIDE_INSTRUCTIONS,
+        // 16 lanes on the machines without AVX-512 too.
+        traversal_tested: true,
     },
     Info {
         backend: Backend::Avx2,
@@ -243,6 +257,7 @@ const INFO: [Info; 11] = [
         cpu: Cpu::V3,
         estimates: true,
         instructions: "AVX2 + FMA (pulp's V3 entry point)",
+        traversal_tested: true,
     },
     Info {
         backend: Backend::Avx512,
@@ -259,6 +274,7 @@ const INFO: [Info; 11] = [
         cpu: Cpu::V4,
         estimates: true,
         instructions: "AVX-512 F/BW/CD/DQ/VL (pulp's V4 entry point)",
+        traversal_tested: true,
     },
     Info {
         backend: Backend::Pulp8,
@@ -275,6 +291,7 @@ const INFO: [Info; 11] = [
         cpu: Cpu::V3,
         estimates: false,
         instructions: "AVX2 + FMA (pulp V3)",
+        traversal_tested: false,
     },
     Info {
         backend: Backend::Pulp16,
@@ -291,6 +308,7 @@ const INFO: [Info; 11] = [
         cpu: Cpu::V4,
         estimates: false,
         instructions: "AVX-512 F/BW/CD/DQ/VL (pulp V4)",
+        traversal_tested: false,
     },
     Info {
         backend: Backend::Pulp4,
@@ -308,6 +326,7 @@ const INFO: [Info; 11] = [
         cpu: Cpu::Neon,
         estimates: false,
         instructions: "NEON (pulp Neon)",
+        traversal_tested: false,
     },
     Info {
         backend: Backend::ScalarEst,
@@ -325,6 +344,7 @@ const INFO: [Info; 11] = [
         cpu: Cpu::Baseline,
         estimates: true,
         instructions: "SSE scalar, with rsqrtss/rcpss estimates",
+        traversal_tested: false,
     },
 ];
 
@@ -366,9 +386,42 @@ const fn collect<const N: usize>(swept: bool) -> [Backend; N] {
     out
 }
 
+/// How many rows of [`INFO`] the traversal tests run on.
+const fn count_tested() -> usize {
+    let (mut n, mut i) = (0, 0);
+    while i < INFO.len() {
+        if INFO[i].traversal_tested {
+            n += 1;
+        }
+        i += 1;
+    }
+    n
+}
+
+/// The backends the traversal tests run on, in [`INFO`]'s order.
+const fn collect_tested<const N: usize>() -> [Backend; N] {
+    let mut out = [Backend::Scalar; N];
+    let (mut n, mut i) = (0, 0);
+    while i < INFO.len() {
+        if INFO[i].traversal_tested {
+            out[n] = INFO[i].backend;
+            n += 1;
+        }
+        i += 1;
+    }
+    out
+}
+
 impl Backend {
     /// Every swept backend, in [`INFO`]'s order (narrowest first within each family).
     pub const ALL: [Backend; count(true)] = collect(true);
+
+    /// The backends the traversal tests run on, in [`INFO`]'s order: every width on this
+    /// architecture, each compiled once (see `Info::traversal_tested`).
+    pub const TRAVERSAL_TESTED: [Backend; count_tested()] = collect_tested();
+
+    /// The set of [`Backend::TRAVERSAL_TESTED`], for the tests' `Only` kernels.
+    pub const TRAVERSAL_TESTED_BITS: u32 = Backend::bits(&Backend::TRAVERSAL_TESTED);
 
     /// The backends outside the sweeps, which the command line and the factor table of
     /// `table3` name: the scalar backend with estimated arithmetic.
