@@ -378,6 +378,7 @@ fn plots(ctx: &Ctx) -> anyhow::Result<()> {
                     y_label: "RMSE (display values)".into(),
                     series,
                     log2_x: true,
+                    log_y: true,
                 },
             )?;
         }

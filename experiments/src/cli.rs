@@ -395,6 +395,7 @@ mod tests {
                 y_label: "y".into(),
                 series: vec![crate::plot::Series::new("good", points)],
                 log2_x: false,
+                log_y: false,
             },
         )?;
         Ok(())

@@ -58,6 +58,8 @@ pub struct LineChart {
     pub series: Vec<Series>,
     /// Logarithmic x axis with base 2 (lane counts 1, 2, 4, 8, 16); x must be positive.
     pub log2_x: bool,
+    /// Logarithmic y axis (errors over decades); points with y <= 0 are left out.
+    pub log_y: bool,
 }
 
 /// A grouped bar chart: for each category one bar per series (e.g. Mrays/s per scene, one
@@ -109,11 +111,17 @@ pub fn line_chart(out: &Path, stem: &str, chart: &LineChart) -> anyhow::Result<P
         .series
         .iter()
         .flat_map(|s| s.points.iter().copied())
-        .filter(|&(x, y)| x.is_finite() && y.is_finite() && (!chart.log2_x || x > 0.0));
-    let (mut x0, mut x1, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY);
+        .filter(|&p| drawable(chart, p));
+    let (mut x0, mut x1, mut y0, mut y1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
     for (x, y) in points {
         x0 = x0.min(x);
         x1 = x1.max(x);
+        y0 = y0.min(y);
         y1 = y1.max(y);
     }
     if !x0.is_finite() {
@@ -123,7 +131,24 @@ pub fn line_chart(out: &Path, stem: &str, chart: &LineChart) -> anyhow::Result<P
         x1 = x0 + 1.0;
     }
     let y1 = if y1 > 0.0 { y1 * 1.1 } else { 1.0 };
-    write_both(out, stem, &Lines { chart, x0, x1, y1 })
+    // A log axis starts below the smallest point; a linear one at 0.
+    let y0 = if chart.log_y { y0 / 1.1 } else { 0.0 };
+    write_both(
+        out,
+        stem,
+        &Lines {
+            chart,
+            x0,
+            x1,
+            y0,
+            y1,
+        },
+    )
+}
+
+/// Whether a point can be drawn on the chart's axes (positive where an axis is logarithmic).
+fn drawable(chart: &LineChart, (x, y): (f64, f64)) -> bool {
+    x.is_finite() && y.is_finite() && (!chart.log2_x || x > 0.0) && (!chart.log_y || y > 0.0)
 }
 
 /// A bar chart's data is drawable: categories and series, one value per category each.
@@ -177,16 +202,18 @@ struct Lines<'a> {
     chart: &'a LineChart,
     x0: f64,
     x1: f64,
+    y0: f64,
     y1: f64,
 }
 
 impl Draw for Lines<'_> {
     fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> anyhow::Result<()> {
-        let (x, y) = (self.x0..self.x1, 0.0..self.y1);
-        if self.chart.log2_x {
-            draw_lines(root, self.chart, x.log_scale().base(2.0), y)
-        } else {
-            draw_lines(root, self.chart, x, y)
+        let (x, y) = (self.x0..self.x1, self.y0..self.y1);
+        match (self.chart.log2_x, self.chart.log_y) {
+            (true, true) => draw_lines(root, self.chart, x.log_scale().base(2.0), y.log_scale()),
+            (true, false) => draw_lines(root, self.chart, x.log_scale().base(2.0), y),
+            (false, true) => draw_lines(root, self.chart, x, y.log_scale()),
+            (false, false) => draw_lines(root, self.chart, x, y),
         }
     }
 }
@@ -225,15 +252,17 @@ fn err(e: impl Display) -> anyhow::Error {
     anyhow!("{e}")
 }
 
-fn draw_lines<DB: DrawingBackend, X>(
+fn draw_lines<DB: DrawingBackend, X, Y>(
     root: DrawingArea<DB, Shift>,
     chart: &LineChart,
     x_spec: X,
-    y_range: std::ops::Range<f64>,
+    y_spec: Y,
 ) -> anyhow::Result<()>
 where
     X: AsRangedCoord<Value = f64>,
     X::CoordDescType: ValueFormatter<f64>,
+    Y: AsRangedCoord<Value = f64>,
+    Y::CoordDescType: ValueFormatter<f64>,
 {
     root.fill(&WHITE).map_err(err)?;
     let mut ctx = ChartBuilder::on(&root)
@@ -241,7 +270,7 @@ where
         .margin(16)
         .x_label_area_size(48)
         .y_label_area_size(64)
-        .build_cartesian_2d(x_spec, y_range)
+        .build_cartesian_2d(x_spec, y_spec)
         .map_err(err)?;
     let label_style = (FONT, 16);
     ctx.configure_mesh()
@@ -261,7 +290,7 @@ where
             .points
             .iter()
             .copied()
-            .filter(|&(x, y)| x.is_finite() && y.is_finite() && (!chart.log2_x || x > 0.0))
+            .filter(|&p| drawable(chart, p))
             .collect();
         if series.dashed {
             ctx.draw_series(DashedLineSeries::new(points, 8, 6, style))
@@ -428,6 +457,7 @@ mod tests {
                 Series::reference("ideal", vec![(1.0, 1.0), (4.0, 4.0)]),
             ],
             log2_x: true,
+            log_y: false,
         };
         let files = line_chart(dir.path(), "lines", &lines).unwrap();
         assert_eq!(files.png, Path::new("plots/lines.png"));
@@ -461,6 +491,7 @@ mod tests {
         let empty = LineChart {
             series: vec![Series::new("a", vec![(0.0, 1.0)])],
             log2_x: true, // x = 0 cannot be drawn on a log axis
+            log_y: false,
             ..LineChart::default()
         };
         let e = line_chart(dir.path(), "e", &empty).unwrap_err();

@@ -278,6 +278,7 @@ mod tests {
             y_label: "speedup".into(),
             series: vec![Series::new("exp", vec![(1.0, 1.0), (8.0, 8.0)])],
             log2_x: true,
+            log_y: false,
         };
         ctx.line_chart("demo", &chart)?;
         Ok(())

@@ -297,6 +297,7 @@ fn plots(ctx: &Ctx) -> anyhow::Result<()> {
             y_label: "speedup over scalar".into(),
             series,
             log2_x: true,
+            log_y: false,
         },
     )?;
 

@@ -186,6 +186,7 @@ fn plots(ctx: &Ctx) -> anyhow::Result<()> {
             y_label: "speedup over 1 thread".into(),
             series,
             log2_x: true,
+            log_y: false,
         },
     )?;
     Ok(())

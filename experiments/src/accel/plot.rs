@@ -32,6 +32,7 @@ pub(super) fn plots(ctx: &Ctx) -> anyhow::Result<()> {
             y_label: "Mrays/s over width 1".into(),
             series,
             log2_x: true,
+            log_y: false,
         },
     )?;
     let widths: Vec<u32> = {

@@ -222,6 +222,7 @@ fn coherence(ctx: &Ctx) -> anyhow::Result<()> {
                     y_label: "active lanes / lanes".into(),
                     series,
                     log2_x: false,
+                    log_y: false,
                 },
             )?;
         }
