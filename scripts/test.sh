@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The project's tests, set-up included: fetches the pinned native pieces (Embree, meshes,
-# goniodiagram files, HDR maps, the real scenes but the dungeon),
+# goniodiagram files, HDR maps, the real scenes but the dungeon, headless Chromium),
 # then runs the whole workspace's tests with the default features and with none.
 # On a machine that is not x86-64 (docs/platforms.md) Embree's tests are skipped by name.
 # Usage: scripts/test.sh [extra cargo test arguments]
@@ -17,6 +17,8 @@ export COHERENT_REQUIRE_HDR=1
 export COHERENT_REQUIRE_SCENES=1
 # And the accelerators' native libraries (Embree), where the registries have them.
 export COHERENT_REQUIRE_ACCELERATORS=1
+# And the headless browser of `coherent view`'s page test (native.py's `chromium` step).
+export COHERENT_REQUIRE_BROWSER=1
 # A backend this CPU has must run, not be skipped: the list is computed here from the CPU's
 # flags (machines differ: some have AVX-512, some only AVX2), independently of the crate's own
 # detection. COHERENT_REQUIRE_BACKENDS set by the caller wins.
@@ -31,6 +33,10 @@ if [[ "$(uname -m)" != x86_64 && -z "${EMBREE_DIR:-}" ]]; then
     exclude=(--exclude coherent-embree)
     skip=(-- --skip embree)
     export COHERENT_REQUIRE_ACCELERATORS=0
+fi
+# The pinned Chromium packages are amd64 ones.
+if [[ "$(uname -m)" != x86_64 ]]; then
+    export COHERENT_REQUIRE_BROWSER=0
 fi
 # Libraries, binaries and test targets, then the doc tests: not the examples, which
 # `cargo test` would build too (clippy --all-targets checks that they compile) and which

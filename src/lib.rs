@@ -29,3 +29,4 @@ pub mod scene;
 pub mod tabulated;
 pub mod texture;
 pub mod tonemap;
+pub mod view;

@@ -1,6 +1,8 @@
 //! The `coherent` command line (the README says how to use it): `coherent render` renders a
-//! scene with the packet renderer (paper section 7), `coherent scenes` lists the built-in
-//! scenes, `coherent info` describes the CPU, the build and the lane backends.
+//! scene with the packet renderer (paper section 7), `coherent view` renders it progressively
+//! for a web page that moves the camera (the paper's interactive mode), `coherent scenes`
+//! lists the built-in scenes, `coherent info` describes the CPU, the build and the lane
+//! backends.
 
 use clap::{Parser, Subcommand};
 use coherent::accel_any::AccelKind;
@@ -27,6 +29,13 @@ enum Command {
     /// mesh file (framed by a default camera and light). The image is the same for any
     /// thread count; backends and accelerators differ only in rounding.
     Render(Box<RenderArgs>),
+    /// Render a scene progressively and show it on a local web page, where the mouse and
+    /// keys move the camera and the settings change (every change restarts the render).
+    ///
+    /// Prints the page's address. Drag: orbit; shift-drag or right-drag: pan; wheel: dolly.
+    /// `GET /frame.png` is the current image, `GET /state` the figures as JSON. The render
+    /// pauses when no request came for 10 s. Ctrl-C ends it.
+    View(Box<ViewArgs>),
     /// List the built-in scenes and the scene files of the repository's `scenes/` folder
     /// (or `$COHERENT_SCENES`).
     Scenes,
@@ -44,6 +53,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Info { json } => info(json),
         Command::Render(args) => cli::render::run(&args),
+        Command::View(args) => cli::view::run(&args),
         Command::Scenes => scenes(),
     };
     match result {
@@ -161,6 +171,35 @@ struct RenderArgs {
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
+}
+
+/// What `coherent view` takes.
+#[derive(clap::Args, Debug)]
+struct ViewArgs {
+    /// A scene file (.toml), a built-in scene's name, or a bare mesh file.
+    scene: String,
+    /// The address to serve on (only this machine can reach the default).
+    #[arg(long, default_value = "127.0.0.1")]
+    bind: std::net::IpAddr,
+    /// The port to serve on (0: any free port; the address printed says which).
+    #[arg(long, default_value_t = 8000)]
+    port: u16,
+    #[arg(long, help = backend_help())]
+    backend: Option<String>,
+    #[arg(long, default_value = "bsp", help = accel_help())]
+    accel: String,
+    /// Image size WxH.
+    #[arg(long, default_value = "512x384", value_parser = parse_resolution)]
+    resolution: (u32, u32),
+    /// Adaptive anti-aliasing to this relative accuracy (default: the scene's, else 0.05).
+    #[arg(long)]
+    accuracy: Option<f32>,
+    /// Uniform supersampling with N samples per pixel (instead of the adaptive method).
+    #[arg(long, conflicts_with = "accuracy")]
+    spp: Option<u32>,
+    /// Worker threads (default: every core).
+    #[arg(long)]
+    threads: Option<usize>,
 }
 
 /// `--bsp-build`: clap lists the names and refuses others.
