@@ -39,6 +39,7 @@ pub mod table2;
 pub mod table3;
 pub mod table4;
 pub mod table5;
+pub mod view;
 
 /// Every experiment, in the order `reproduce` runs them and the README lists them. The
 /// names are the results contract (`--only` takes them).
@@ -55,4 +56,5 @@ pub const EXPERIMENTS: &[Experiment] = &[
     regroup::EXPERIMENT,
     builds::EXPERIMENT,
     maps::EXPERIMENT,
+    view::EXPERIMENT,
 ];

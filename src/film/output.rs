@@ -28,18 +28,45 @@ impl Film {
         Ok(image)
     }
 
-    /// The displayed image encoded as an sRGB PNG file, in memory.
+    /// The displayed image encoded as an sRGB PNG file, in memory: bands of rows estimated,
+    /// tone-mapped and encoded to sRGB in parallel on the current rayon pool, so that a
+    /// viewer, which makes one after every pass, keeps its threads busy.
     pub fn png(&self, backend: Backend) -> Result<Vec<u8>, FilmError> {
-        let img = image::RgbImage::from_raw(
-            self.width,
-            self.height,
-            srgb_bytes(&self.displayed(backend)?),
-        )
-        .ok_or_else(|| FilmError::Options("image size does not match the pixels".into()))?;
-        let mut out = std::io::Cursor::new(Vec::new());
-        img.write_to(&mut out, image::ImageFormat::Png)
+        use rayon::prelude::*;
+        const ROWS: usize = 16;
+        let w = self.width as usize;
+        let mut bytes = vec![0u8; self.pixels() * 3];
+        bytes
+            .par_chunks_mut(ROWS * w * 3)
+            .enumerate()
+            .try_for_each(|(i, band)| {
+                let first = i * ROWS * w;
+                let px: Vec<[f32; 3]> = (first..first + band.len() / 3)
+                    .map(|p| self.pixel(p))
+                    .collect();
+                let mut mapped = vec![[0.0f32; 3]; px.len()];
+                tonemap::apply_into(backend, &self.tonemap, &px, &mut mapped)?;
+                // `srgb8` clips as the display does ([`Film::displayed`]).
+                for (b, c) in band.chunks_exact_mut(3).zip(&mapped) {
+                    for (b, v) in b.iter_mut().zip(c) {
+                        *b = tonemap::srgb8(*v);
+                    }
+                }
+                Ok::<(), FilmError>(())
+            })?;
+        let img = image::RgbImage::from_raw(self.width, self.height, bytes)
+            .ok_or_else(|| FilmError::Options("image size does not match the pixels".into()))?;
+        // Fast compression: a viewer encodes a frame after every pass, and the default
+        // level took longer than a pass of a small image.
+        let mut out = Vec::new();
+        let encoder = image::codecs::png::PngEncoder::new_with_quality(
+            &mut out,
+            image::codecs::png::CompressionType::Fast,
+            image::codecs::png::FilterType::Sub,
+        );
+        img.write_with_encoder(encoder)
             .map_err(|e| FilmError::Options(format!("encoding the PNG: {e}")))?;
-        Ok(out.into_inner())
+        Ok(out)
     }
 }
 

@@ -391,7 +391,7 @@ fn render(
         Err(FilmError::Cancelled) => return,
         Err(e) => return fail(shared, look.generation, e.to_string()),
     };
-    if let Err(e) = publish(shared, &p, look) {
+    if let Err(e) = pool.install(|| publish(shared, &p, look)) {
         return fail(shared, look.generation, e.to_string());
     }
     loop {
@@ -400,13 +400,13 @@ fn render(
         }
         match pool.install(|| p.step().map(|r| r.is_some())) {
             Ok(true) => {
-                if let Err(e) = publish(shared, &p, look) {
+                if let Err(e) = pool.install(|| publish(shared, &p, look)) {
                     return fail(shared, look.generation, e.to_string());
                 }
             }
             Ok(false) => {
                 // Stopped: the last frame again, with the reason.
-                if let Err(e) = publish(shared, &p, look) {
+                if let Err(e) = pool.install(|| publish(shared, &p, look)) {
                     return fail(shared, look.generation, e.to_string());
                 }
                 wait_for_change(shared, look.generation);
@@ -463,17 +463,25 @@ fn publish(
 ) -> Result<(), FilmError> {
     let s = look.settings;
     let record = &p.passes()[p.passes().len() - 1];
-    let png = match look.aov {
-        Some((kind, buf)) => {
-            let map = buf.map(kind);
-            // Lanes on the packet's own scale, so that widths compare (as `coherent render`).
-            let top = match kind {
-                AovKind::Lanes => s.backend.lanes() as f32,
-                _ => scale_top(&map),
-            };
-            heatmap_png(&map, s.width, s.height, top, kind.label())?
-        }
-        None => p.film().png(s.backend)?,
+    // The frame that says the render stopped shows the last pass again: its image as it was.
+    let same = lock(&shared.frame)
+        .as_ref()
+        .filter(|f| f.generation == look.generation && f.pass == record.pass)
+        .map(|f| (f.png.clone(), f.width, f.height));
+    let png = match (same, look.aov) {
+        (Some((png, _, _)), _) => png,
+        (None, aov) => match aov {
+            Some((kind, buf)) => {
+                let map = buf.map(kind);
+                // Lanes on the packet's own scale, so that widths compare (as `coherent render`).
+                let top = match kind {
+                    AovKind::Lanes => s.backend.lanes() as f32,
+                    _ => scale_top(&map),
+                };
+                heatmap_png(&map, s.width, s.height, top, kind.label())?
+            }
+            None => p.film().png(s.backend)?,
+        },
     };
     let (width, height) = png_size(&png).unwrap_or((s.width, s.height));
     let stats = p.stats();
