@@ -21,23 +21,10 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::RenderArgs;
 
-/// The most worker threads `--threads` accepts: far more than any machine of ours has cores
-/// (rayon's pool with thousands of threads took minutes to start and stop for a 0.01 s frame).
-const MAX_THREADS: usize = 1024;
-
 /// Checks the cheap things before loading anything: the backend, the accelerator's name, the
 /// output's type and folder, the thread count.
 fn check_args(args: &RenderArgs) -> anyhow::Result<(Backend, AccelKind)> {
-    let backend = match &args.backend {
-        Some(b) => {
-            let b: Backend = b.parse()?;
-            if let Some(reason) = b.unavailable_reason() {
-                bail!("backend `{}` cannot run here: {reason}", b.name());
-            }
-            b
-        }
-        None => Backend::widest(),
-    };
+    let backend = super::backend_arg(args.backend.as_deref())?;
     let kind: AccelKind = args.accel.parse()?;
     match args.out.extension().and_then(|e| e.to_str()) {
         Some(e) if e.eq_ignore_ascii_case("exr") || e.eq_ignore_ascii_case("png") => {}
@@ -46,14 +33,7 @@ fn check_args(args: &RenderArgs) -> anyhow::Result<(Backend, AccelKind)> {
             args.out.display()
         ),
     }
-    if let Some(t) = args.threads
-        && !(1..=MAX_THREADS).contains(&t)
-    {
-        bail!(
-            "--threads {t}: must be 1 to {MAX_THREADS} (this machine runs {} at once)",
-            std::thread::available_parallelism().map_or(1, |n| n.get())
-        );
-    }
+    super::threads_arg(args.threads)?;
     // Fail before rendering, not after, when the image cannot be written.
     if let Some(dir) = args.out.parent()
         && !dir.as_os_str().is_empty()

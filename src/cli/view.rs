@@ -10,34 +10,15 @@ use std::sync::Arc;
 
 use anyhow::bail;
 use coherent::accel_any::AccelKind;
-use coherent::simd::Backend;
 use coherent::view::{Sampling, Server, Session, SessionOptions, Settings, load_scene};
 
 use crate::ViewArgs;
 
-/// The most worker threads `--threads` accepts (as `coherent render`).
-const MAX_THREADS: usize = 1024;
-
 /// Runs `coherent view`.
 pub fn run(args: &ViewArgs) -> anyhow::Result<()> {
-    let backend = match &args.backend {
-        Some(b) => {
-            let b: Backend = b.parse()?;
-            if let Some(reason) = b.unavailable_reason() {
-                bail!("backend `{}` cannot run here: {reason}", b.name());
-            }
-            b
-        }
-        None => Backend::widest(),
-    };
+    let backend = super::backend_arg(args.backend.as_deref())?;
     let accel: AccelKind = args.accel.parse()?;
-    let threads = match args.threads {
-        Some(t) if !(1..=MAX_THREADS).contains(&t) => {
-            bail!("--threads {t}: must be 1 to {MAX_THREADS}")
-        }
-        Some(t) => t,
-        None => SessionOptions::default().threads,
-    };
+    let threads = super::threads_arg(args.threads)?.unwrap_or(SessionOptions::default().threads);
     let scene = load_scene(&args.scene)?;
     let mut settings = Settings::of_scene(&scene);
     (settings.width, settings.height) = args.resolution;
