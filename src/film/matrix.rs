@@ -182,11 +182,11 @@ impl Film {
     }
 
     /// The estimate of pixel `p`: the mean of all its samples; the superpixel interpolation
-    /// where the pixel is interpolated and not yet sampled in both matrices, or has no sample.
+    /// until it has one. A pixel's own sample beats its superpixel's corners: the corners
+    /// miss what lies between them, which the adaptive passes go on to check.
     pub fn pixel(&self, p: usize) -> [f32; 3] {
         let n = self.samples(p);
-        let both = self.matrices[0].count[p] > 0 && self.matrices[1].count[p] > 0;
-        if n == 0 || (self.interpolated[p] && !both) {
+        if n == 0 {
             let (x, y) = (p as u32 % self.width, p as u32 / self.width);
             return self.superpixels.interpolate(x, y);
         }
