@@ -68,6 +68,7 @@
 //!             y_label: "speedup".into(),
 //!             series: vec![Series::new("bdf", points)],
 //!             log2_x: true,
+//!             log_y: false,
 //!         },
 //!     )?;
 //!     Ok(())
