@@ -251,9 +251,8 @@ fn error_estimate_decreases_as_passes_go() {
 }
 
 /// The estimate is statistical: from one pass to the next it may wiggle up (a new sample at
-/// an edge moves one matrix's mean away from the other's; on this disc, uniform, it rose in
-/// 18 of 64 passes and sat near 0.028 from 18 to 44 samples per pixel), but once the rays
-/// traced have grown four times it is lower, on every pair of passes.
+/// an edge moves one matrix's mean away from the other's; docs/findings/rendering.md), but
+/// once the rays traced have grown four times it is lower, on every pair of passes.
 #[test]
 fn the_estimate_falls_as_the_rays_grow_fourfold_on_a_still_scene() {
     let disc = |x: f32, y: f32| {
