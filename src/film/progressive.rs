@@ -56,7 +56,7 @@ impl<'t, T: SampleTracer> Progressive<'t, T> {
 
         let mut sp = Superpixels::new(w, h, opts.superpixel.0, opts.superpixel.1);
         let points = sp.corner_positions();
-        let (colors, s) = trace_points(backend, tracer, &points)?;
+        let (colors, s) = trace_points(backend, tracer, &points, sp.nx as usize + 1)?;
         T::merge_stats(&mut stats, s);
         for (c, v) in sp.corners.iter_mut().zip(colors) {
             *c = fix(v, &mut fixups);
@@ -68,7 +68,7 @@ impl<'t, T: SampleTracer> Progressive<'t, T> {
         if let Method::Adaptive { accuracy, .. } = opts.method {
             mark_interpolated(&mut film, accuracy);
         }
-        let errors = pixel_errors(&film);
+        let errors = pixel_errors(&film, false);
         let record = PassRecord {
             pass: 0,
             span: Span { k: 0, n: 0 },

@@ -124,7 +124,8 @@ pub(super) fn run_pass<T: SampleTracer>(
     let outs = trace_tiles(backend, tracer, film, &st.tiles, &job, cancel).map_err(Err)?;
     let sums = PassSums::of(outs, fixups, stats, T::merge_stats);
     st.rays += sums.rays;
-    let errors = pixel_errors(film);
+    let adaptive = matches!(opts.method, Method::Adaptive { .. });
+    let errors = pixel_errors(film, adaptive);
     let done = match opts.method {
         Method::Adaptive {
             accuracy,
@@ -189,7 +190,7 @@ fn plan_pass(
             let (need, capped) = st.pending.take().unwrap_or_else(|| {
                 needed(
                     film,
-                    &pixel_errors(film).max,
+                    &pixel_errors(film, true).max,
                     accuracy,
                     max_samples_per_pixel,
                 )
@@ -350,7 +351,7 @@ pub(super) fn mark_interpolated(film: &mut Film, accuracy: f32) {
 /// The two matrices' disagreement after a pass.
 pub(super) struct PixelErrors {
     /// Per pixel, the largest channel difference of the two matrices on the display; `None`
-    /// until the pixel is sampled in both.
+    /// until the pixel is sampled in both. Empty unless asked for ([`pixel_errors`]).
     max: Vec<Option<f32>>,
     /// The mean of `max` over the pixels sampled in both (NaN when none is).
     pub(super) mean: f64,
@@ -358,26 +359,48 @@ pub(super) struct PixelErrors {
     pub(super) estimate: f64,
 }
 
-/// Each pixel's disagreement and the image's error estimate: rows in parallel, their sums
-/// added in row order (the same figures for any thread count).
+/// Each pixel's disagreement (kept per pixel only when `per_pixel`: the adaptive method's
+/// choice of pixels needs it, the figures of a pass do not) and the image's error estimate:
+/// rows in parallel, their sums added in row order (the same figures for any thread count).
 ///
 /// Each matrix holds an independent estimate of about half the pixel's samples, so the
 /// difference of the two has twice the variance of one and four times that of their mean:
 /// half the difference estimates the error of the pixel as displayed. A pixel not sampled in
 /// both says nothing about its error; it counts as the largest (1 per channel), so the
 /// estimate bounds what is not known yet instead of leaving it out.
-pub(super) fn pixel_errors(film: &Film) -> PixelErrors {
+///
+/// A row with no pixel sampled in both (every row of the pre-render and of a 1-spp pass) is
+/// settled by a branch-free scan of its counts: going pixel by pixel, building a `None` per
+/// pixel, took 2.4 ms after the pre-render and 5.5 ms after the pass of a 1024 x 768 frame
+/// on one core, 8% of the frame (docs/findings/frames.md).
+pub(super) fn pixel_errors(film: &Film, per_pixel: bool) -> PixelErrors {
     let w = film.width as usize;
+    let [a, b] = &film.matrices;
     let rows: Vec<(Vec<Option<f32>>, f64, u64, f64)> = (0..film.height as usize)
         .into_par_iter()
         .map(|y| {
-            let mut max = Vec::with_capacity(w);
+            let row = y * w..(y + 1) * w;
+            let both = a.count[row.clone()]
+                .iter()
+                .zip(&b.count[row.clone()])
+                .fold(false, |any, (&ca, &cb)| any | ((ca > 0) & (cb > 0)));
+            if !both {
+                // What the loop below adds for `w` pixels without a difference, exactly
+                // (sums of 3 stay whole numbers far below 2^53); a loop of `w` dependent adds
+                // took 1.4 ms a frame.
+                let squares = 3.0 * w as f64;
+                let max = if per_pixel { vec![None; w] } else { Vec::new() };
+                return (max, 0.0, 0, squares);
+            }
+            let mut max = Vec::with_capacity(if per_pixel { w } else { 0 });
             let (mut sum, mut n, mut squares) = (0.0f64, 0u64, 0.0f64);
-            for p in y * w..(y + 1) * w {
+            for p in row {
                 match film.difference(p) {
                     Some(d) => {
                         let m = d.iter().fold(0.0f32, |a, &v| a.max(v));
-                        max.push(Some(m));
+                        if per_pixel {
+                            max.push(Some(m));
+                        }
                         sum += m.min(1e6) as f64;
                         n += 1;
                         squares += d
@@ -386,7 +409,9 @@ pub(super) fn pixel_errors(film: &Film) -> PixelErrors {
                             .sum::<f64>();
                     }
                     None => {
-                        max.push(None);
+                        if per_pixel {
+                            max.push(None);
+                        }
                         squares += 3.0;
                     }
                 }
@@ -395,7 +420,7 @@ pub(super) fn pixel_errors(film: &Film) -> PixelErrors {
         })
         .collect();
     let mut out = PixelErrors {
-        max: Vec::with_capacity(film.pixels()),
+        max: Vec::with_capacity(if per_pixel { film.pixels() } else { 0 }),
         mean: 0.0,
         estimate: 0.0,
     };
@@ -663,46 +688,73 @@ fn pass_tile<T: SampleTracer>(
     Ok(out)
 }
 
-/// Traces points (the pre-render) in packets, in parallel, in order; ids are the indices.
+/// Traces points (the pre-render) in packets, in parallel: the colour of each point, in
+/// order, with the statistics. `points` is a grid of `cols` points a row, row by row (the
+/// superpixel corners); a point's id is its index.
+///
+/// A packet takes a block of neighbouring points (4 x 4 at 16 lanes, 4 x 2 at 8, 2 x 2 at
+/// 4), not a run along a row: 16 corners of one row span 128 pixels of a 1024 x 768 frame,
+/// and such packets traced the pre-render's 16,641 points in 7.8 ms, as long as 90,000
+/// camera samples take (docs/findings/frames.md). Each point keeps its id, so its random
+/// numbers, and so its colour, do not depend on which packet traced it.
 pub(super) fn trace_points<T: SampleTracer>(
     backend: Backend,
     tracer: &T,
     points: &[(f32, f32)],
+    cols: usize,
 ) -> Result<(Vec<[f32; 3]>, T::Stats), FilmError> {
     let lanes = backend.lanes();
-    let outs = points
-        .par_chunks(POINTS_PER_TASK)
-        .with_max_len(TILES_PER_JOB)
-        .enumerate()
-        .map(|(t, chunk)| {
-            let first_id = t * POINTS_PER_TASK;
-            let packets: Vec<PacketIn> = chunk
-                .chunks(lanes)
-                .enumerate()
-                .map(|(g, group)| {
-                    let mut p = PacketIn::default();
-                    for (m, &(x, y)) in group.iter().enumerate() {
-                        p.xs[m] = x;
-                        p.ys[m] = y;
-                        p.ids[m] = (first_id + g * lanes + m) as i32;
-                        p.bits |= 1 << m;
+    let (bw, bh) = block_of(lanes);
+    let cols = cols.max(1);
+    let rows = points.len().div_ceil(cols);
+    let mut packets = Vec::with_capacity(points.len().div_ceil(lanes) + rows + cols);
+    for by in (0..rows).step_by(bh) {
+        for bx in (0..cols).step_by(bw) {
+            let mut p = PacketIn::default();
+            let mut m = 0;
+            for y in by..(by + bh).min(rows) {
+                for x in bx..(bx + bw).min(cols) {
+                    let i = y * cols + x;
+                    if i >= points.len() {
+                        continue;
                     }
-                    p
-                })
-                .collect();
-            let (colours, stats) = trace_packets(backend, tracer, &packets)?;
-            let mut out = Vec::with_capacity(chunk.len());
-            for (group, c) in chunk.chunks(lanes).zip(&colours) {
-                out.extend_from_slice(&c[..group.len()]);
+                    (p.xs[m], p.ys[m]) = points[i];
+                    p.ids[m] = i as i32;
+                    p.bits |= 1 << m;
+                    m += 1;
+                }
             }
-            Ok((out, stats))
-        })
+            if p.bits != 0 {
+                packets.push(p);
+            }
+        }
+    }
+    let outs = packets
+        .par_chunks(POINTS_PER_TASK / lanes)
+        .with_max_len(TILES_PER_JOB)
+        .map(|chunk| trace_packets(backend, tracer, chunk))
         .collect::<Result<Vec<_>, BackendError>>()?;
     let mut stats = T::Stats::default();
-    let mut colors = Vec::with_capacity(points.len());
-    for (c, s) in outs {
-        colors.extend(c);
+    let mut colors = vec![[0.0f32; 3]; points.len()];
+    for ((colours, s), chunk) in outs
+        .into_iter()
+        .zip(packets.chunks(POINTS_PER_TASK / lanes))
+    {
+        for (p, c) in chunk.iter().zip(&colours) {
+            for m in 0..lanes {
+                if p.bits >> m & 1 == 1 {
+                    colors[p.ids[m] as usize] = c[m];
+                }
+            }
+        }
         T::merge_stats(&mut stats, s);
     }
     Ok((colors, stats))
+}
+
+/// The block of grid points a packet of `lanes` takes: as square as a power of two allows,
+/// the wider side across.
+fn block_of(lanes: usize) -> (usize, usize) {
+    let bw = 1usize << lanes.trailing_zeros().div_ceil(2);
+    (bw, (lanes / bw).max(1))
 }

@@ -506,3 +506,56 @@ fn a_film_after_another_of_its_size_starts_from_zero() {
     assert!((0..second.film.pixels()).all(|p| second.film.samples(p) == 2));
     assert_eq!(second.image(), image);
 }
+
+#[test]
+fn the_pre_render_traced_in_blocks_gives_each_corner_its_own_colour_and_id() {
+    // 37 x 23 pixels of 8 x 6 superpixels: a grid of 6 x 5 corners, which the blocks of 4
+    // lanes and more do not tile exactly, so every block shape meets a ragged edge.
+    let f = |x: f32, y: f32| [x, y, x * 0.5 + y];
+    let opts = FilmOptions::new(37, 23, Method::Uniform { spp: 1 });
+    for b in Backend::usable() {
+        let t = Analytic::recording(f);
+        let p = Progressive::new(b, &t, &opts).unwrap();
+        let sp = p.film().superpixels.clone();
+        drop(p);
+        let positions = sp.corner_positions();
+        assert_eq!(positions.len(), 30, "{b}");
+        for (i, (c, &(x, y))) in sp.corners.iter().zip(&positions).enumerate() {
+            assert_eq!(*c, f(x, y), "{b}: corner {i}");
+        }
+        let mut ids = t.ids.unwrap().into_inner().unwrap();
+        ids.sort();
+        assert_eq!(ids, (0..30).collect::<Vec<i32>>(), "{b}: the corners' ids");
+    }
+}
+
+#[test]
+fn a_pass_without_pixels_sampled_twice_has_the_figures_of_the_pixel_by_pixel_sum() {
+    use super::render::pixel_errors;
+    let f = |x: f32, y: f32| [(x * 0.37).sin().abs(), (y * 0.11).cos().abs(), 0.5];
+    for spp in [1, 2] {
+        let opts = FilmOptions::new(40, 30, Method::Uniform { spp });
+        let r = render(Backend::Scalar, &Analytic::new(f), &opts, &quiet).unwrap();
+        // The figures alone, and with each pixel's difference kept, are the same numbers.
+        let (alone, kept) = (pixel_errors(&r.film, false), pixel_errors(&r.film, true));
+        assert_eq!(
+            alone.estimate.to_bits(),
+            kept.estimate.to_bits(),
+            "{spp} spp"
+        );
+        assert_eq!(alone.mean.to_bits(), kept.mean.to_bits(), "{spp} spp");
+        let last = r.passes.last().unwrap();
+        assert_eq!(
+            last.estimate.to_bits(),
+            alone.estimate.to_bits(),
+            "{spp} spp"
+        );
+        if spp == 1 {
+            // No pixel has a sample in both matrices: nothing is known yet.
+            assert!(last.error.is_nan());
+            assert_eq!(last.estimate, 1.0);
+        } else {
+            assert!(last.estimate < 1.0, "{}", last.estimate);
+        }
+    }
+}

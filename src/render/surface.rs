@@ -35,6 +35,11 @@ pub struct Geometry {
     /// Per instance: the cofactor matrix of the linear part (`det * inverse transpose`), which
     /// carries normals (and the cross product of world edges) to world space; 9 arrays.
     cofactor: [Vec<f32>; 9],
+    /// Whether any mesh has vertex normals, and whether any has texture coordinates. Without
+    /// them the tables above hold zeros, and the gathers that would read them are skipped:
+    /// their result is known (the geometric normal; coordinates and derivatives of zero).
+    has_normals: bool,
+    has_uvs: bool,
 }
 
 /// The shading context of a packet's hits (lanes outside `active` hold unspecified values).
@@ -86,6 +91,8 @@ impl Geometry {
             tri_offset: Vec::new(),
             xform: Default::default(),
             cofactor: Default::default(),
+            has_normals: scene.meshes.iter().any(|m| m.normals.is_some()),
+            has_uvs: scene.meshes.iter().any(|m| m.uvs.is_some()),
         };
         let mut mesh_tri_offset = Vec::with_capacity(scene.meshes.len());
         for m in &scene.meshes {
@@ -158,7 +165,14 @@ impl Geometry {
         let zero_i = l.splat_i32(0);
         let inst = active.select_i32(hits.inst, zero_i);
         let prim = active.select_i32(hits.prim, zero_i);
-        let tri = l.gather_u32(&self.tri_offset, inst) + prim;
+        // One instance (a scene whose static objects were merged, a bare mesh): every lane
+        // reads the same transform, so it is splatted, not gathered (19 gathers per packet).
+        let single = self.tri_offset.len() == 1;
+        let tri = if single {
+            l.splat_i32(self.tri_offset[0] as i32)
+        } else {
+            l.gather_u32(&self.tri_offset, inst)
+        } + prim;
         let t = active.select(hits.t, l.splat(0.0));
         let (b1, b2) = (
             active.select(hits.u, l.splat(0.0)),
@@ -182,28 +196,39 @@ impl Geometry {
         // World-space edges through the instance's linear part.
         let mut m = [l.splat(0.0); 9];
         for k in 0..9 {
-            m[k] = l.gather(&self.xform[k], inst);
+            m[k] = if single {
+                l.splat(self.xform[k][0])
+            } else {
+                l.gather(&self.xform[k], inst)
+            };
         }
         let e1 = mat3_mul(&m, po[1] - po[0]);
         let e2 = mat3_mul(&m, po[2] - po[0]);
         let ng = e1.cross(e2).normalize();
 
         // Shading normal: interpolated vertex normals through the cofactor matrix.
-        let mut n_obj = Vec3s::splat(l, glam::Vec3::ZERO);
-        let w = [b0, b1, b2];
-        for k in 0..3 {
-            let n = Vec3s::new(
-                l.gather(&self.nrm[0], vi[k]),
-                l.gather(&self.nrm[1], vi[k]),
-                l.gather(&self.nrm[2], vi[k]),
-            );
-            n_obj = n.mul_add(w[k], n_obj);
+        let mut n_world = Vec3s::splat(l, glam::Vec3::ZERO);
+        if self.has_normals {
+            let mut n_obj = n_world;
+            let w = [b0, b1, b2];
+            for k in 0..3 {
+                let n = Vec3s::new(
+                    l.gather(&self.nrm[0], vi[k]),
+                    l.gather(&self.nrm[1], vi[k]),
+                    l.gather(&self.nrm[2], vi[k]),
+                );
+                n_obj = n.mul_add(w[k], n_obj);
+            }
+            let mut c = [l.splat(0.0); 9];
+            for k in 0..9 {
+                c[k] = if single {
+                    l.splat(self.cofactor[k][0])
+                } else {
+                    l.gather(&self.cofactor[k], inst)
+                };
+            }
+            n_world = mat3_mul(&c, n_obj);
         }
-        let mut c = [l.splat(0.0); 9];
-        for k in 0..9 {
-            c[k] = l.gather(&self.cofactor[k], inst);
-        }
-        let n_world = mat3_mul(&c, n_obj);
         let len2: L::F32s = n_world.dot(n_world);
         // No vertex normals (zero) or a degenerate interpolation: the geometric normal.
         let smooth = len2.gt(l.splat(1e-12));
@@ -216,9 +241,11 @@ impl Geometry {
 
         // Texture coordinates and their per-vertex differences.
         let mut st = [[l.splat(0.0); 3]; 2];
-        for k in 0..3 {
-            st[0][k] = l.gather(&self.uv[0], vi[k]);
-            st[1][k] = l.gather(&self.uv[1], vi[k]);
+        if self.has_uvs {
+            for k in 0..3 {
+                st[0][k] = l.gather(&self.uv[0], vi[k]);
+                st[1][k] = l.gather(&self.uv[1], vi[k]);
+            }
         }
         let s = b0 * st[0][0] + b1 * st[0][1] + b2 * st[0][2];
         let tt = b0 * st[1][0] + b1 * st[1][1] + b2 * st[1][2];
@@ -284,4 +311,69 @@ fn mat3_mul<L: Lanes>(m: &[L::F32s; 9], v: Vec3s<L>) -> Vec3s<L> {
         m[1].mul_add(v.x, m[4].mul_add(v.y, m[7] * v.z)),
         m[2].mul_add(v.x, m[5].mul_add(v.y, m[8] * v.z)),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use coherent_simd::scalar::Scalar;
+
+    /// The surface of each triangle of instance `inst` at one point, as text (every field,
+    /// the sign of zero and NaN included).
+    fn surfaces(g: &Geometry, scene: &RenderScene, inst: usize) -> Vec<String> {
+        let l = Scalar;
+        let mesh = &scene.meshes[scene.instances[inst].mesh].mesh;
+        let origin = Vec3s::splat(l, glam::Vec3::new(0.1, 0.2, 3.0));
+        let dir = Vec3s::splat(l, glam::Vec3::new(0.1, -0.2, -1.0).normalize());
+        let d = Vec3s::splat(l, glam::Vec3::new(1e-3, 2e-3, -1e-3));
+        let diff = Differentials {
+            dorigin_dx: d,
+            dorigin_dy: -d,
+            ddir_dx: d * 0.5,
+            ddir_dy: d * 2.0,
+        };
+        (0..mesh.indices.len())
+            .map(|k| {
+                let hits = Hits::<Scalar> {
+                    t: 1.5,
+                    u: 0.2,
+                    v: 0.3,
+                    prim: l.splat_i32(k as i32),
+                    inst: l.splat_i32(inst as i32),
+                };
+                format!("{:?}", g.surface(l, &hits, &origin, &dir, &diff))
+            })
+            .collect()
+    }
+
+    #[test]
+    fn skipped_gathers_give_the_surface_the_gathers_gave() {
+        let mut scene = crate::scene::load("cornell").unwrap();
+        // Without vertex normals and texture coordinates, the tables hold zeros: reading
+        // them or not is the same surface.
+        for m in &mut scene.meshes {
+            m.normals = None;
+            m.uvs = None;
+        }
+        let skip = Geometry::new(&scene);
+        assert!(!skip.has_normals && !skip.has_uvs);
+        let mut read = skip.clone();
+        (read.has_normals, read.has_uvs) = (true, true);
+        assert!(scene.instances.len() > 1);
+        for i in 0..scene.instances.len() {
+            assert_eq!(
+                surfaces(&skip, &scene, i),
+                surfaces(&read, &scene, i),
+                "{i}"
+            );
+        }
+        // One instance: its transform splatted is the transform gathered.
+        let full = crate::scene::load("cornell").unwrap();
+        let mut one = full.clone();
+        one.instances.truncate(1);
+        let (mut g1, mut g) = (Geometry::new(&one), Geometry::new(&full));
+        // Read the normals (zeros where a mesh has none) to use the cofactor matrix too.
+        (g1.has_normals, g.has_normals) = (true, true);
+        assert_eq!(surfaces(&g1, &one, 0), surfaces(&g, &full, 0));
+    }
 }
