@@ -4,13 +4,15 @@
 //!
 //! Per `accel` scene (the built-in ones and the real meshes), `builds.csv` has the median of a
 //! few builds of each structure on one thread and on every core of the machine: the BSP with
-//! the `exact` preset (the sweep at every node) and the `fast` one (binned SAH at large
+//! the `exact` preset (the sweep at every node), the `binned` one (binned at every level) and
+//! the `fast` one (binned SAH at large
 //! nodes, subtrees in parallel), Embree at the quality the renderer asks of it, and obvhs.
 //! Beside the BSP's builds, its trees' quality: nodes, leaf references, depth and SAH cost
 //! (each object tree's, relative to its own root box, summed). `builds_presets.csv` then times
 //! the two presets' trees on the same rays (primary, shadow, diffuse; single rays and packets
 //! of the widest backend), interleaved, one thread, and checks that they give the same
-//! answers.
+//! answers. `builds_phases.csv` splits each BSP build into its object trees, its top tree
+//! and the rest (triangle records).
 
 use coherent::accel::{Accel, AccelError};
 use coherent::accel_any::{AccelKind, AnyAccel, AnyParams};
@@ -31,7 +33,7 @@ pub const EXPERIMENT: Experiment = Experiment {
     name: "builds",
     description: "build time per structure, preset and thread count; the BSP presets' trees",
     paper: "section 3 (the BSP's build), against Embree 4 and obvhs",
-    csv: &[FILE, PRESETS_FILE],
+    csv: &[FILE, PRESETS_FILE, PHASES_FILE],
     plots: &[PLOT],
     status: Status::Ready { run, plot, report },
 };
@@ -59,6 +61,21 @@ pub(crate) const PRESETS_HEADER: &[&str] = &[
     "exact_mrays_per_s",
     "fast_mrays_per_s",
     "fast_over_exact",
+    "binned_mrays_per_s",
+    "binned_over_exact",
+];
+/// Where each BSP build's time goes: the object trees (each tree's own time, summed over
+/// trees built in parallel, so it can pass the wall time on several threads), the top tree,
+/// and the rest (validation, triangle records, shared edges, cull boxes).
+pub(crate) const PHASES_FILE: &str = "builds_phases.csv";
+pub(crate) const PHASES_HEADER: &[&str] = &[
+    "scene",
+    "preset",
+    "threads",
+    "build_ms",
+    "object_trees_ms",
+    "top_ms",
+    "other_ms",
 ];
 pub(crate) const PLOT: &str = "builds";
 
@@ -135,18 +152,20 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
     let bar = ctx.progress(all.len() as u64, "builds");
     let mut builds = ctx.csv(FILE, HEADER)?;
     let mut presets = ctx.csv(PRESETS_FILE, PRESETS_HEADER)?;
+    let mut phases = ctx.csv(PHASES_FILE, PHASES_HEADER)?;
     for s in &all {
         run_scene(
             ctx,
             s,
             (w, h),
             (repeats, samples),
-            (&mut builds, &mut presets),
+            (&mut builds, &mut presets, &mut phases),
         )?;
         bar.inc(1);
     }
     builds.finish()?;
     presets.finish()?;
+    phases.finish()?;
     bar.finish_and_clear();
     Ok(())
 }
@@ -158,7 +177,7 @@ fn run_scene(
     s: &BuiltinScene,
     (w, h): (u32, u32),
     (repeats, samples): (usize, usize),
-    (out, presets): (&mut CsvOut, &mut CsvOut),
+    (out, presets, phases): (&mut CsvOut, &mut CsvOut, &mut CsvOut),
 ) -> anyhow::Result<()> {
     let mut trees: Vec<Bsp> = Vec::new();
     for preset in BuildPreset::ALL {
@@ -180,6 +199,22 @@ fn run_scene(
                 &q.max_depth,
                 &format!("{:.4}", q.sah_cost),
             ])?;
+            let trees_s: f64 = b
+                .mesh_trees()
+                .iter()
+                .map(|m| m.tree.stats.build_seconds)
+                .sum();
+            let top_s = b.top_tree().stats.build_seconds;
+            let last_s = b.stats().build_seconds;
+            phases.row(&[
+                &s.name,
+                &q.preset,
+                &threads,
+                &format!("{:.3}", last_s * 1e3),
+                &format!("{:.3}", trees_s * 1e3),
+                &format!("{:.3}", top_s * 1e3),
+                &format!("{:.3}", (last_s - trees_s - top_s).max(0.0) * 1e3),
+            ])?;
             if threads == 1 {
                 trees.push(b);
             }
@@ -200,12 +235,14 @@ fn run_scene(
             let res = interleaved(trees.len(), samples, |i| {
                 pass_any(&trees[i], &r, occ, backend)
             })?;
-            if let Some(why) = disagreement(&res[0].1, &res[1].1, r.len()) {
-                anyhow::bail!(
-                    "{} {} rays at width {width}: the fast tree disagrees with the exact one: {why}",
-                    s.name,
-                    kind.name()
-                );
+            for (i, preset) in BuildPreset::ALL.iter().enumerate().skip(1) {
+                if let Some(why) = disagreement(&res[0].1, &res[i].1, r.len()) {
+                    anyhow::bail!(
+                        "{} {} rays at width {width}: the {preset} tree disagrees with the exact one: {why}",
+                        s.name,
+                        kind.name()
+                    );
+                }
             }
             let rate = |i: usize| r.len() as f64 / res[i].0 / 1e6;
             presets.row(&[
@@ -216,6 +253,8 @@ fn run_scene(
                 &format!("{:.3}", rate(0)),
                 &format!("{:.3}", rate(1)),
                 &format!("{:.3}", rate(1) / rate(0)),
+                &format!("{:.3}", rate(2)),
+                &format!("{:.3}", rate(2) / rate(0)),
             ])?;
         }
     }
@@ -453,12 +492,99 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     if let Some(p) = ctx.plot_markdown(PLOT, "build time per structure") {
         md.push_str(&p);
     }
+    binned_report(&t, [&one, &all], &mut md, &mut checks)?;
     presets_report(ctx, &mut md, &mut checks)?;
     if !checks.is_empty() {
         md.push_str("\nThe build targets:\n\n");
         md.push_str(&condensed("scene", &checks));
     }
     Ok(Some(md))
+}
+
+/// The report's part on the build binned at every level: its times against Embree's and the
+/// exact build's, its SAH cost against the exact tree's, and their targets.
+fn binned_report(
+    t: &Table,
+    [one, all]: [&str; 2],
+    md: &mut String,
+    checks: &mut Vec<Check>,
+) -> anyhow::Result<()> {
+    let mut rows = Vec::new();
+    for s in t.distinct("scene")? {
+        let ms = |a: &str, p: &str, th: &str| build_ms(t, &s, a, p, th);
+        let Some(b1) = ms("bsp", "binned", one) else {
+            continue;
+        };
+        let (ba, e1, ea) = (
+            ms("bsp", "binned", all),
+            ms("embree", "default", one),
+            ms("embree", "default", all),
+        );
+        let x1 = ms("bsp", "exact", one);
+        let sah = |p: &str| cell(t, [&s, "bsp", p, one], "sah_cost");
+        let num = |v: Option<f64>| v.map_or("—".to_owned(), fmt_num);
+        let ratio = |a: Option<f64>, b: Option<f64>| match (a, b) {
+            (Some(a), Some(b)) if b > 0.0 => Some(a / b),
+            _ => None,
+        };
+        let fmt = |r: Option<f64>| r.map_or("—".to_owned(), |r| format!("{r:.2}x"));
+        let sah_ratio = ratio(sah("binned"), sah("exact"));
+        rows.push(vec![
+            s.clone(),
+            num(Some(b1)),
+            num(ba),
+            fmt(ratio(Some(b1), x1)),
+            fmt(ratio(Some(b1), e1)),
+            fmt(ratio(ba, ea)),
+            sah_ratio.map_or("—".to_owned(), |r| format!("{:+.1} %", 100.0 * (r - 1.0))),
+        ]);
+        if let Some(r) = ratio(Some(b1), e1) {
+            checks.push(Check::at_most(
+                &s,
+                "bsp binned build <= 1.5x embree's, 1 thread",
+                format!("{r:.2}x"),
+                r,
+                1.5,
+            ));
+        }
+        if let Some(r) = ratio(ba, ea) {
+            checks.push(Check::at_most(
+                &s,
+                &format!("bsp binned build <= 1.2x embree's, {all} threads"),
+                format!("{r:.2}x"),
+                r,
+                1.2,
+            ));
+        }
+        if let Some(r) = sah_ratio {
+            checks.push(Check::at_most(
+                &s,
+                "binned tree's SAH cost <= 1.05x the exact tree's",
+                format!("{r:.3}x"),
+                r,
+                1.05,
+            ));
+        }
+    }
+    if rows.is_empty() {
+        return Ok(());
+    }
+    md.push_str(
+        "\nThe build binned at every level (`binned`: min-max bins down to a few references, \
+         a sweep below, references partitioned in place, large nodes across threads):\n\n",
+    );
+    let h = [
+        "scene".to_owned(),
+        format!("binned ms, {one} thr."),
+        format!("binned ms, {all} thr."),
+        format!("binned / exact, {one} thr."),
+        format!("binned / embree, {one} thr."),
+        format!("binned / embree, {all} thr."),
+        "SAH binned vs exact".to_owned(),
+    ];
+    let h: Vec<&str> = h.iter().map(String::as_str).collect();
+    md.push_str(&markdown_table(&h, &rows));
+    Ok(())
 }
 
 /// The report's presets part: the fast tree's trace speed over the exact tree's, and its
@@ -503,6 +629,15 @@ fn presets_report(ctx: &Ctx, md: &mut String, checks: &mut Vec<Check>) -> anyhow
             v,
             0.9,
         ));
+        if let Ok(b) = p.f64(r, "binned_over_exact") {
+            checks.push(Check::at_least(
+                s,
+                "binned tree traces >= 0.95x the exact tree",
+                format!("{k} width {w}: {b:.2}x"),
+                b,
+                0.95,
+            ));
+        }
     }
     Ok(())
 }
@@ -534,10 +669,14 @@ mod tests {
         }
         out.finish().unwrap();
         let mut p = ctx.csv(PRESETS_FILE, PRESETS_HEADER).unwrap();
-        p.row(&[&"mesh", &"primary", &1, &"single", &1.0, &0.95, &0.95])
-            .unwrap();
-        p.row(&[&"mesh", &"primary", &16, &"avx512", &4.0, &3.2, &0.8])
-            .unwrap();
+        p.row(&[
+            &"mesh", &"primary", &1, &"single", &1.0, &0.95, &0.95, &1.0, &1.0,
+        ])
+        .unwrap();
+        p.row(&[
+            &"mesh", &"primary", &16, &"avx512", &4.0, &3.2, &0.8, &4.0, &1.0,
+        ])
+        .unwrap();
         p.finish().unwrap();
         let md = report(&ctx).unwrap().unwrap();
         // fast / embree: 30 / 20 on one thread, 18 / 12 on two; SAH +5 %.

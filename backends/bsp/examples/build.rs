@@ -9,8 +9,8 @@
 //! cargo run --release -p coherent-bsp --example build -- [SHAPE...] [--preset exact|fast]
 //!     [--runs N] [--threads 1,2] [--quick]
 //! SHAPE: blob room terrain spheres (built-in scenes), terrain100k, soup100k, needles (long
-//! thin triangles, 36,762 of them), fan (20,000 long thin triangles through one point);
-//! default all. BINS, SWEEP_BELOW, REFS (max_refs_per_tri) override the preset's parameters.
+//! thin triangles, 36,762 of them), fan (20,000 long thin triangles through one point),
+//! bunny (the fetched real mesh), blocks (4,761 objects of 12 triangles); default all. BINS, SWEEP_BELOW, REFS (max_refs_per_tri) override the preset's parameters.
 //! ```
 
 use coherent_accel::scenes::{self, SceneSize};
@@ -52,14 +52,76 @@ pub fn fan(n: usize, seed: u64) -> Mesh {
     Mesh::from_triangles("fan", &tris)
 }
 
+/// A Wavefront OBJ file's triangles (`v` and `f` lines; faces fanned), for real meshes such
+/// as the bunny the experiments fetch (`.cache/meshes/glmark2-data/bunny.obj`).
+fn obj(path: &str) -> Option<Mesh> {
+    let text = std::fs::read_to_string(path).ok()?;
+    let (mut positions, mut indices) = (Vec::new(), Vec::new());
+    for line in text.lines() {
+        let mut w = line.split_whitespace();
+        match w.next() {
+            Some("v") => {
+                let c: Vec<f32> = w.take(3).filter_map(|x| x.parse().ok()).collect();
+                positions.push(Vec3::new(c[0], c[1], c[2]));
+            }
+            Some("f") => {
+                let v: Vec<u32> = w
+                    .filter_map(|x| x.split('/').next()?.parse::<u32>().ok())
+                    .map(|i| i - 1)
+                    .collect();
+                for k in 1..v.len().saturating_sub(1) {
+                    indices.push([v[0], v[k], v[k + 1]]);
+                }
+            }
+            _ => {}
+        }
+    }
+    Some(Mesh::new(path, positions, indices))
+}
+
+/// Many objects, as a city is: a `side` x `side` grid of boxes of random heights, each its
+/// own mesh (12 triangles) placed by an instance.
+fn blocks(side: usize, seed: u64) -> Scene {
+    let mut rng = Rng::new(seed);
+    let mut meshes = Vec::new();
+    let mut instances = Vec::new();
+    for i in 0..side * side {
+        let h = rng.range(1.0, 12.0);
+        meshes.push(shapes::cuboid("block", Vec3::ZERO, Vec3::new(0.8, h, 0.8)));
+        let at = Vec3::new((i % side) as f32, 0.0, (i / side) as f32);
+        instances.push(coherent_accel::Instance::new(
+            i,
+            glam::Affine3A::from_translation(at),
+        ));
+    }
+    Scene::new(meshes, instances)
+}
+
 fn scene(name: &str, size: SceneSize) -> Option<Scene> {
     Some(match name {
+        "bunny" => Scene::single(obj(&format!(
+            "{}/../../.cache/meshes/glmark2-data/bunny.obj",
+            env!("CARGO_MANIFEST_DIR")
+        ))?),
+        "blocks" => blocks(69, 6),
         "terrain100k" => Scene::single(shapes::terrain("t", 100.0, 224, 12.0, 5)),
         "soup100k" => Scene::single(shapes::soup("s", 100_000, 20.0, 0.8, 11)),
         "needles" => Scene::single(needles(36_762, 3)),
         "fan" => Scene::single(fan(20_000, 4)),
         _ => scenes::by_name(name, size)?.scene,
     })
+}
+
+/// The process's CPU time so far (every thread's, from `/proc/self/task/*/schedstat`), in
+/// seconds: on a shared machine, what a one-thread build costs regardless of waiting.
+fn cpu_seconds() -> f64 {
+    let Ok(dir) = std::fs::read_dir("/proc/self/task") else {
+        return f64::NAN;
+    };
+    dir.filter_map(|t| std::fs::read_to_string(t.ok()?.path().join("schedstat")).ok())
+        .filter_map(|s| s.split_whitespace().next()?.parse::<f64>().ok())
+        .sum::<f64>()
+        / 1e9
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -106,7 +168,7 @@ fn main() {
         .to_vec();
     }
     println!(
-        "shape        preset threads   tris  build_s(med)   nodes   leaf_refs depth  sah_cost  same_as_1"
+        "shape        preset threads   tris  build_s(med)   nodes   leaf_refs depth  sah_cost  same_as_1  cpu_s(med)"
     );
     for name in &names {
         let s = scene(name, size).unwrap_or_else(|| panic!("unknown shape {name}"));
@@ -115,6 +177,8 @@ fn main() {
             p.object.build = preset;
             p.object.bins = env("BINS").unwrap_or(p.object.bins);
             p.object.sweep_below = env("SWEEP_BELOW").unwrap_or(p.object.sweep_below);
+            p.object.flat_sweep_below =
+                env("FLAT_SWEEP_BELOW").unwrap_or(p.object.flat_sweep_below);
             p.object.max_refs_per_tri = env("REFS").unwrap_or(p.object.max_refs_per_tri);
             let mut first: Option<Bsp> = None;
             for &t in &threads {
@@ -122,12 +186,13 @@ fn main() {
                     .num_threads(t)
                     .build()
                     .unwrap();
-                let mut secs = vec![];
+                let (mut secs, mut cpu) = (vec![], vec![]);
                 let mut bsp = None;
                 for _ in 0..runs {
-                    let t0 = std::time::Instant::now();
+                    let (t0, c0) = (std::time::Instant::now(), cpu_seconds());
                     bsp = Some(pool.install(|| Bsp::build(&s, &p).unwrap()));
                     secs.push(t0.elapsed().as_secs_f64());
+                    cpu.push(cpu_seconds() - c0);
                 }
                 let bsp = bsp.unwrap();
                 let st = bsp.stats();
@@ -141,7 +206,7 @@ fn main() {
                     eq.to_string()
                 });
                 println!(
-                    "{name:<12} {:<6} {t:>7} {:>6} {:>13.4} {:>7} {:>11} {:>5} {:>9.2}  {same}",
+                    "{name:<12} {:<6} {t:>7} {:>6} {:>13.4} {:>7} {:>11} {:>5} {:>9.2}  {same:<9}  {:.4}",
                     preset.name(),
                     st.triangles,
                     median(secs),
@@ -149,6 +214,7 @@ fn main() {
                     st.leaf_refs,
                     st.max_depth,
                     sah,
+                    median(cpu),
                 );
                 first.get_or_insert(bsp);
             }

@@ -131,7 +131,7 @@ fn node(c: &Ctx, out: &mut Out, at: usize, v: Aabb, refs: Vec<Ref>, depth: u32, 
 /// Appends subtrees `l` and `r` (each a fresh [`Out`]: root at 0, padding at 1) to `out`, their
 /// roots as the children pair at `out.nodes.len()`, their other nodes after it, moving every
 /// child and item index by where it lands.
-fn append(out: &mut Out, l: Out, r: Out) {
+pub(crate) fn append(out: &mut Out, l: Out, r: Out) {
     let c = out.nodes.len();
     let items = out.items.len();
     // Node i >= 2 of `l` lands at c + i, of `r` at c + l.nodes.len() + i - 2: both lengths are

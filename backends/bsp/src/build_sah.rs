@@ -133,6 +133,7 @@ pub fn build_sah(tris: &[[Vec3; 3]], p: &SahParams) -> KdTree {
     match p.build {
         BuildPreset::Exact => build_exact(tris, p),
         BuildPreset::Fast => crate::build_binned::build_binned(tris, p),
+        BuildPreset::Binned => crate::build_flat::build_flat(tris, p),
     }
 }
 
@@ -555,6 +556,13 @@ mod tests {
             SahParams::slow(),
             binned(SahParams::fast()),
             binned(SahParams::default()),
+            SahParams::default().with_build(BuildPreset::Binned),
+            SahParams::fast().with_build(BuildPreset::Binned),
+            SahParams {
+                bins: 4,
+                flat_sweep_below: 0,
+                ..SahParams::slow().with_build(BuildPreset::Binned)
+            },
         ] {
             let t = build_sah(&tris, &p);
             assert!(

@@ -5,7 +5,9 @@
 //!   split events and perfect splits (Wald & Havran 2006; Havran's thesis), [`build_sah`],
 //!   with parameters and presets in [`SahParams`]; or, with [`BuildPreset::Fast`], binned SAH
 //!   above a node size and that sweep below, subtrees built in parallel ([`build_binned`]).
-//!   Both make leaves rather than pass a reference budget ([`SahParams::max_refs_per_tri`]).
+//!   With [`BuildPreset::Binned`], binned SAH at every level on flat reference arrays,
+//!   parallel at both scales ([`build_flat`]).
+//!   All make leaves rather than pass a reference budget ([`SahParams::max_refs_per_tri`]).
 //! - Top level: a binned-SAH kd-tree over the instances' world boxes, [`build_top`], rebuilt
 //!   by [`coherent_accel::Accel::set_instances`] without touching the mesh trees.
 //! - 8-byte [`Node`]s with both children adjacent; triangles as projection-test records
@@ -52,6 +54,7 @@
 mod beam;
 mod bsp;
 mod build_binned;
+mod build_flat;
 mod build_sah;
 mod build_top;
 mod clip;
@@ -71,6 +74,7 @@ mod walk1;
 
 pub use bsp::{Bsp, MeshTree};
 pub use build_binned::{PARALLEL_MIN, build_binned};
+pub use build_flat::build_flat;
 pub use build_sah::build_sah;
 pub use build_top::build_top;
 pub use clip::clipped_bounds;

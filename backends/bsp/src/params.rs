@@ -33,7 +33,16 @@ pub struct SahParams {
     /// 256: the measured trade-off of build time against SAH cost, against 64 and 1,024
     /// (docs/findings/traversal.md, the fast build).
     pub sweep_below: u32,
-    /// Reference budget, both builders: a tree over N triangles holds at most
+    /// [`BuildPreset::Binned`]: nodes of at most this many references sort their box bounds
+    /// and sweep every plane instead of binning (below [`crate::PARALLEL_MIN`]).
+    ///
+    /// 96, measured (`build` example, bunny / blob / needles, one thread, process CPU time and
+    /// summed SAH cost against the exact tree's): 24 took 0.167 / 0.171 / 0.238 s at +6.9 /
+    /// +6.4 / +5.2 %, 48 0.172 / 0.174 / 0.262 s at +4.9 / +4.5 / +6.3 %, 96 0.178 / 0.179 /
+    /// 0.269 s at +3.8 / +3.6 / +5.7 %, 256 0.188 / 0.192 / 0.281 s at +2.8 / +2.9 / +5.5 %
+    /// (docs/findings/builds.md).
+    pub flat_sweep_below: u32,
+    /// Reference budget, every builder: a tree over N triangles holds at most
     /// `ceil(max_refs_per_tri * N)` leaf references, for any input, e.g. thousands of long
     /// thin triangles through one point, whose clipped parts otherwise multiply at every split
     /// near the point. The build counts references (in finished leaves and in nodes still to
@@ -65,16 +74,23 @@ pub enum BuildPreset {
     /// Not the default: it builds faster for trees a little costlier to traverse, and no
     /// frame-level measurement has shown it ahead yet (docs/findings/traversal.md).
     Fast,
+    /// Binned SAH at every node of more than [`SahParams::flat_sweep_below`] references, a
+    /// sweep over the few sorted box bounds below, on flat reference arrays partitioned in
+    /// place; straddling triangles clipped by the chosen plane only; large nodes binned and
+    /// partitioned across threads, subtrees built as tasks (Shevtsov, Soupikov & Kapustin
+    /// 2007). The same tree on any number of threads.
+    Binned,
 }
 
 impl BuildPreset {
-    pub const ALL: [BuildPreset; 2] = [BuildPreset::Exact, BuildPreset::Fast];
+    pub const ALL: [BuildPreset; 3] = [BuildPreset::Exact, BuildPreset::Fast, BuildPreset::Binned];
 
     /// The name on the command line (`--bsp-build`).
     pub fn name(self) -> &'static str {
         match self {
             BuildPreset::Exact => "exact",
             BuildPreset::Fast => "fast",
+            BuildPreset::Binned => "binned",
         }
     }
 }
@@ -91,7 +107,10 @@ impl std::str::FromStr for BuildPreset {
         Self::ALL
             .into_iter()
             .find(|b| b.name() == s)
-            .ok_or_else(|| format!("unknown BSP build `{s}`; builds: exact, fast"))
+            .ok_or_else(|| {
+                let names: Vec<&str> = Self::ALL.iter().map(|b| b.name()).collect();
+                format!("unknown BSP build `{s}`; builds: {}", names.join(", "))
+            })
     }
 }
 
@@ -144,6 +163,7 @@ impl SahParams {
             build: BuildPreset::Exact,
             bins: 32,
             sweep_below: 256,
+            flat_sweep_below: 96,
             max_refs_per_tri: 16.0,
         }
     }

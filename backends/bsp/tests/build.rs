@@ -62,6 +62,40 @@ fn fast_tree_is_the_same_on_one_and_two_threads() {
     }
 }
 
+/// The build binned at every level is the same tree on 1, 2 and 16 threads (large nodes bin
+/// and partition in chunks across threads, subtrees are tasks).
+#[test]
+fn binned_tree_is_the_same_on_1_2_and_16_threads() {
+    let meshes = [
+        soup("soup", 40_000, 20.0, 0.8, 3),
+        terrain("terrain", 100.0, 96, 12.0, 5),
+    ];
+    let binned = SahParams::default().with_build(BuildPreset::Binned);
+    for m in &meshes {
+        assert!(
+            m.indices.len() > 4 * PARALLEL_MIN,
+            "too small to build in parallel"
+        );
+        for p in [
+            binned.clone(),
+            SahParams {
+                max_refs_per_tri: 1.1,
+                bins: 7,
+                ..binned.clone()
+            },
+        ] {
+            let one = build_on(1, &m.positions, &m.indices, &p);
+            // The tight budget stops splits early: a few hundred nodes.
+            assert!(one.stats.nodes > 300, "{:?}", one.stats);
+            assert_eq!(one.stats.leaf_refs, one.items.len());
+            for threads in [2, 16] {
+                let other = build_on(threads, &m.positions, &m.indices, &p);
+                assert_same(&one, &other, &format!("{} on {threads} threads", m.name));
+            }
+        }
+    }
+}
+
 /// The exact build's tree does not depend on the thread pool either (mesh trees are built in
 /// parallel, each by itself).
 #[test]
@@ -173,4 +207,106 @@ fn a_million_tiny_objects_build_and_answer_within_2_gb() {
     if let Some(peak) = peak_rss_bytes() {
         assert!(peak < LIMIT, "peak resident memory {peak} bytes");
     }
+}
+
+/// Every triangle is in every leaf whose voxel holds a part of it (its part clipped to the
+/// voxel reaching inside in every axis where the voxel has extent), for the build binned at
+/// every level on a mesh large enough to bin and partition across threads.
+#[test]
+fn binned_leaves_hold_every_triangle_that_reaches_them() {
+    let m = soup("soup", 3 * PARALLEL_MIN, 20.0, 0.8, 7);
+    let p = SahParams::default().with_build(BuildPreset::Binned);
+    let tris: Vec<[Vec3; 3]> = m
+        .indices
+        .iter()
+        .map(|t| t.map(|i| m.positions[i as usize]))
+        .collect();
+    let t = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap()
+        .install(|| coherent_bsp::build_sah(&tris, &p));
+    assert!(t.stats.leaves > 1000, "{:?}", t.stats);
+    for (j, tri) in tris.iter().enumerate() {
+        let mut todo = vec![(0usize, t.bounds)];
+        while let Some((i, v)) = todo.pop() {
+            let reaches = coherent_bsp::clipped_bounds(tri, &v)
+                .is_some_and(|b| (0..3).all(|k| b.max[k] > b.min[k] || v.max[k] == v.min[k]));
+            if !reaches {
+                continue;
+            }
+            let n = t.nodes[i];
+            if n.is_leaf() {
+                assert!(
+                    t.items[n.items()].contains(&(j as u32)),
+                    "triangle {j} missing from leaf {i}"
+                );
+            } else {
+                let (k, s) = (n.axis(), n.split());
+                let (mut l, mut r) = (v, v);
+                l.max[k] = s;
+                r.min[k] = s;
+                todo.push((n.left(), l));
+                todo.push((n.left() + 1, r));
+            }
+        }
+    }
+}
+
+/// Bad input, every build: no triangles and non-finite vertices are refused with an error;
+/// only degenerate triangles, or all in one plane, build.
+#[test]
+fn bad_meshes_are_refused_or_built() {
+    let tri = |a: Vec3| vec![a, a + Vec3::X, a + Vec3::Y];
+    for build in BuildPreset::ALL {
+        let mut p = BspParams::default();
+        p.object.build = build;
+        let empty = Mesh::new("empty", tri(Vec3::ZERO), vec![]);
+        assert!(Bsp::build(&Scene::single(empty), &p).is_err(), "{build}");
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            let m = Mesh::new("bad", tri(Vec3::new(0.0, bad, 0.0)), vec![[0, 1, 2]]);
+            let e = Bsp::build(&Scene::single(m), &p).unwrap_err();
+            assert!(e.to_string().contains("bad"), "{build}: {e}");
+        }
+        // Only degenerate triangles: points and segments.
+        let m = Mesh::new(
+            "degenerate",
+            vec![Vec3::ZERO, Vec3::X, 2.0 * Vec3::X],
+            vec![[0, 0, 0], [0, 1, 2], [1, 1, 2]],
+        );
+        let b = Bsp::build(&Scene::single(m), &p).unwrap();
+        assert_eq!(b.stats().degenerate, 3, "{build}");
+        // 20,000 triangles in the plane z = 1: built, and answering as brute force does.
+        let flat = flat(&soup("plane", 20_000, 20.0, 0.8, 2));
+        let scene = Scene::single(flat);
+        let b = Bsp::build(&scene, &p).unwrap();
+        let bf = coherent_accel::BruteForce::build(&scene, &()).unwrap();
+        let mut rng = Rng::new(3);
+        for _ in 0..200 {
+            let o = rng.vec3(Vec3::new(-25.0, -25.0, 3.0), Vec3::new(25.0, 25.0, 6.0));
+            let ray = Ray1::new(
+                o,
+                rng.vec3(Vec3::splat(-0.3), Vec3::splat(0.3)) - Vec3::Z,
+                0.0,
+                100.0,
+            );
+            assert_eq!(
+                b.intersect1(&ray).map(|h| h.t),
+                bf.intersect1(&ray).map(|h| h.t),
+                "{build}: {ray:?}"
+            );
+        }
+    }
+}
+
+/// `m` flattened into the plane z = 1.
+fn flat(m: &Mesh) -> Mesh {
+    Mesh::new(
+        "plane",
+        m.positions
+            .iter()
+            .map(|v| Vec3::new(v.x, v.y, 1.0))
+            .collect(),
+        m.indices.clone(),
+    )
 }

@@ -54,11 +54,30 @@ fn param_sets(lanes: usize) -> Vec<BspParams> {
         };
         v.push(p);
     }
+    // The build binned at every level: binning down to single references (no sweep), with
+    // few bins and without perfect splits, and with a tight reference budget and the sweep
+    // below 16 references.
+    for (object, flat_sweep_below, bins, refs) in [
+        (SahParams::default(), 0, 8, 16.0),
+        (SahParams::fast(), 8, 3, 16.0),
+        (SahParams::slow(), 16, 5, 1.2),
+    ] {
+        v.push(BspParams {
+            object: SahParams {
+                build: BuildPreset::Binned,
+                flat_sweep_below,
+                bins,
+                max_refs_per_tri: refs,
+                ..object
+            },
+            ..BspParams::default()
+        });
+    }
     v
 }
 
 /// How many sets [`param_sets`] gives.
-const PARAM_SETS: usize = 7;
+const PARAM_SETS: usize = 10;
 
 /// Triangles a kd-tree build finds hard, shuffled together: long thin ones (spanning the
 /// scene one way, a thousandth of it across), degenerate ones (points, lines), coplanar sets
@@ -233,6 +252,29 @@ pub fn edge_cases<L: Lanes>(l: L) {
         let o = rng.vec3(Vec3::splat(-9.0), Vec3::splat(9.0));
         rays.push(Ray1::infinite(o, hub - o));
     }
+    check(&scene, &rays);
+
+    // Huge triangles (coordinates near f32's limit, areas beyond it) beside small ones.
+    let big = 3.0e38_f32;
+    let mut tris = vec![
+        [
+            Vec3::new(-big, -big, 0.0),
+            Vec3::new(big, -big, 0.0),
+            Vec3::new(0.0, big, 0.0),
+        ],
+        [
+            Vec3::new(-big, 0.0, -big),
+            Vec3::new(big, 0.0, -big),
+            Vec3::new(0.0, 0.0, big),
+        ],
+    ];
+    let (small, _) = hard_scene(12, 200);
+    let m = &small.meshes[0];
+    tris.extend(m.indices.iter().map(|t| t.map(|i| m.positions[i as usize])));
+    let scene = Scene::single(Mesh::from_triangles("huge", &tris));
+    let mut rays = random_rays(13, &scene, 100);
+    rays.push(Ray1::infinite(Vec3::new(0.5, 0.5, 10.0), -Vec3::Z));
+    rays.push(Ray1::infinite(Vec3::new(1e30, 0.5, -1e30), Vec3::Z));
     check(&scene, &rays);
 }
 
