@@ -23,6 +23,11 @@
           150.0.7871.100-1~deb12u1, 86 MB, x86-64), installed system-wide with
           `apt-get install` (root), which brings its libraries from Debian: the browser that
           tests/view_browser.rs drives through `coherent view`'s page.
+  mitsuba The peer renderer Mitsuba 3.9.1 and Dr.Jit 1.5.0 (PyPI wheels for CPython 3.11,
+          x86-64, unpacked into .native/mitsuba/site/), and Debian's libllvm22
+          1:22.1.8-1~deb12u1 (installed system-wide with `apt-get install`, root), the LLVM
+          that Mitsuba's vectorised variants compile with: the `peers` experiment and the
+          exporter's tests (src/export/) run it.
 
 Debian packages are kept in .cache/debs/ once checked (the dungeon's is not: it is too
 large), so steps that share a package download it once.
@@ -33,7 +38,7 @@ Embree is usable (a mesh that cannot be fetched is a warning: the experiments sa
 on without it), 1 when Embree could not be set up (the message names the cause and the fix).
 
 Usage: python3 scripts/native.py [embree] [meshes] [photometry] [hdr] [assimp] [cornell]
-                                 [chromium] [dungeon]
+                                 [chromium] [mitsuba] [dungeon]
        (no argument: every step but dungeon)
 Environment: EMBREE_DIR=<an Embree 4 install> skips the wheel (the backend loads from there).
 """
@@ -175,6 +180,33 @@ PHOTOMETRY_ARCHIVES = [
 ]
 
 
+# The peer renderer: Mitsuba 3 and the Dr.Jit it requires, exactly (its metadata pins
+# drjit==1.5.0), as CPython 3.11 manylinux wheels; and the LLVM its `llvm_*` variants load
+# at run time. Dr.Jit 1.5 fails at its first kernel with Debian's LLVM 15 and 16 (an
+# instruction-selection error); Debian's libllvm22 works.
+MITSUBA_WHEELS = [
+    {
+        "requirement": "mitsuba==3.9.1",
+        "file": "mitsuba-3.9.1-cp311-cp311-manylinux_2_28_x86_64.whl",
+        "sha256": "7ad4fca9aedd588e5851177c7510eb8b6d27b2a5d2ee614e443dfd1bf92d457f",
+    },
+    {
+        "requirement": "drjit==1.5.0",
+        "file": "drjit-1.5.0-cp311-cp311-manylinux_2_27_x86_64.manylinux_2_28_x86_64.whl",
+        "sha256": "0d9cb374fe1f05d4167a8c24cbce6084404372e5fb3dcd6f08bbb1cee06f245a",
+    },
+]
+MITSUBA_PIP_ARGS = ["--python-version", "3.11", "--implementation", "cp",
+                    "--platform", "manylinux_2_28_x86_64"]
+LLVM_DEB = {
+    "package": "libllvm22",
+    "version": "1:22.1.8-1~deb12u1",
+    "sha256": "729ec3e943d320515c2bbdc96acfffd7ce34861e62bd5c42726bf586d644dfe2",
+    # Where the package puts the library; src/export/peer.rs looks for it there.
+    "library": "/usr/lib/x86_64-linux-gnu/libLLVM.so.22.1",
+}
+
+
 class SetupError(Exception):
     """A set-up step failed; the message names the cause and the fix."""
 
@@ -206,7 +238,8 @@ def write_marker(folder, names):
     (folder / "READY.json").write_text(json.dumps(recorded, indent=1, sort_keys=True) + "\n")
 
 
-def pip_download(requirement, extra_args, dest):
+def pip_download(requirement, extra_args, dest,
+                 hint="or set EMBREE_DIR to an Embree 4 install"):
     cmd = [sys.executable, "-m", "pip", "download", "--quiet", "--no-deps",
            "--only-binary=:all:", "--disable-pip-version-check", "--dest", str(dest),
            *extra_args, requirement]
@@ -217,7 +250,7 @@ def pip_download(requirement, extra_args, dest):
     if run.returncode != 0:
         tail = (run.stderr or run.stdout).strip().splitlines()[-3:]
         raise SetupError(f"`pip download {requirement}` failed: {' / '.join(tail)}; "
-                         "check that PyPI is reachable, or set EMBREE_DIR to an Embree 4 install")
+                         f"check that PyPI is reachable, {hint}")
 
 
 def verify(path, expected, what):
@@ -549,6 +582,68 @@ def setup_chromium():
         say(f"warning: chromium-headless-shell unavailable: {e}")
 
 
+def setup_mitsuba():
+    """Unpacks the pinned Mitsuba and Dr.Jit wheels into .native/mitsuba/site/ and installs
+    the pinned libllvm22 (root needed); a failure is reported and the rest goes on (the
+    exporter's tests then skip, or fail under COHERENT_REQUIRE_PEER, and `peers` says so)."""
+    folder = NATIVE / "mitsuba"
+    try:
+        if platform.machine() not in ("x86_64", "AMD64") or sys.platform != "linux":
+            raise SetupError(f"no pinned Mitsuba for {sys.platform}/{platform.machine()} "
+                             "(the pins are x86-64 Linux wheels)")
+        if not marker_ok(folder):
+            say("fetching Mitsuba 3.9.1 and Dr.Jit 1.5.0 (PyPI wheels, 68 MB, pinned by "
+                "sha256) into .native/mitsuba")
+            downloads = NATIVE / "downloads"
+            downloads.mkdir(parents=True, exist_ok=True)
+            site = folder / "site"
+            if site.exists():
+                shutil.rmtree(site)
+            site.mkdir(parents=True)
+            for spec in MITSUBA_WHEELS:
+                wheel = downloads / spec["file"]
+                if not wheel.exists() or sha256_of(wheel) != spec["sha256"]:
+                    with tempfile.TemporaryDirectory(dir=downloads) as tmp:
+                        pip_download(spec["requirement"], MITSUBA_PIP_ARGS, tmp,
+                                     hint="or leave the peer out (the `peers` experiment "
+                                          "then reports it missing)")
+                        got = list(Path(tmp).iterdir())
+                        if [p.name for p in got] != [spec["file"]]:
+                            raise SetupError(f"pip served {[p.name for p in got]}, not the "
+                                             f"pinned {spec['file']}")
+                        verify(got[0], spec["sha256"], spec["requirement"])
+                        os.replace(got[0], wheel)
+                verify(wheel, spec["sha256"], spec["requirement"])
+                # A wheel is a zip of the installed tree: unpacked, it imports as installed.
+                with zipfile.ZipFile(wheel) as zf:
+                    zf.extractall(site)
+            versions = {s["requirement"].split("==")[0]: s["requirement"].split("==")[1]
+                        for s in MITSUBA_WHEELS}
+            (folder / "VERSIONS.json").write_text(json.dumps(versions, indent=1) + "\n")
+            write_marker(folder, ["VERSIONS.json", "site/mitsuba/__init__.py",
+                                  "site/drjit/__init__.py"])
+        if deb_installed(LLVM_DEB["package"]) != LLVM_DEB["version"]:
+            if os.geteuid() != 0:
+                raise SetupError("installing Debian's libllvm22 needs root: run "
+                                 "`sudo python3 scripts/native.py mitsuba`")
+            say(f"installing Debian's libllvm22={LLVM_DEB['version']} (29 MB) with apt-get")
+            with tempfile.TemporaryDirectory() as tmp:
+                deb = apt_download(LLVM_DEB["package"], LLVM_DEB["version"], tmp)
+                verify(deb, LLVM_DEB["sha256"], f"libllvm22={LLVM_DEB['version']}")
+                env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
+                run = subprocess.run(["apt-get", "install", "-y", "-q",
+                                      "--no-install-recommends", f"./{deb.name}"],
+                                     cwd=tmp, env=env, capture_output=True, text=True)
+                if run.returncode != 0:
+                    tail = (run.stderr or run.stdout).strip().splitlines()[-3:]
+                    raise SetupError(f"`apt-get install` of libllvm22 failed: "
+                                     f"{' / '.join(tail)}")
+        if not Path(LLVM_DEB["library"]).exists():
+            raise SetupError(f"libllvm22 is installed but {LLVM_DEB['library']} is missing")
+    except (SetupError, OSError, zipfile.BadZipFile) as e:
+        say(f"warning: the peer renderer Mitsuba is unavailable: {e}")
+
+
 def setup_dungeon():
     """The castle dungeon level (a 257 MB package, not kept once extracted); a failure is
     reported and the rest goes on."""
@@ -579,7 +674,8 @@ def setup_dungeon():
 
 
 def main(argv):
-    default = {"embree", "meshes", "photometry", "hdr", "assimp", "cornell", "chromium"}
+    default = {"embree", "meshes", "photometry", "hdr", "assimp", "cornell", "chromium",
+               "mitsuba"}
     steps = default | {"dungeon"}
     what = set(argv) or default
     unknown = what - steps
@@ -606,6 +702,8 @@ def main(argv):
         setup_cornell()
     if "chromium" in what:
         setup_chromium()
+    if "mitsuba" in what:
+        setup_mitsuba()
     if "dungeon" in what:
         setup_dungeon()
     return status

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The project's tests, set-up included: fetches the pinned native pieces (Embree, meshes,
-# goniodiagram files, HDR maps, the real scenes but the dungeon, headless Chromium),
+# goniodiagram files, HDR maps, the real scenes but the dungeon, headless Chromium, the peer
+# renderer Mitsuba),
 # then runs the whole workspace's tests with the default features and with none.
 # On a machine that is not x86-64 (docs/platforms.md) Embree's tests are skipped by name.
 # Usage: scripts/test.sh [extra cargo test arguments]
@@ -19,6 +20,8 @@ export COHERENT_REQUIRE_SCENES=1
 export COHERENT_REQUIRE_ACCELERATORS=1
 # And the headless browser of `coherent view`'s page test (native.py's `chromium` step).
 export COHERENT_REQUIRE_BROWSER=1
+# And the peer renderer the exporter's tests render with (native.py's `mitsuba` step).
+export COHERENT_REQUIRE_PEER=1
 # A backend this CPU has must run, not be skipped: the list is computed here from the CPU's
 # flags (machines differ: some have AVX-512, some only AVX2), independently of the crate's own
 # detection. COHERENT_REQUIRE_BACKENDS set by the caller wins.
@@ -34,9 +37,10 @@ if [[ "$(uname -m)" != x86_64 && -z "${EMBREE_DIR:-}" ]]; then
     skip=(-- --skip embree)
     export COHERENT_REQUIRE_ACCELERATORS=0
 fi
-# The pinned Chromium packages are amd64 ones.
+# The pinned Chromium packages and Mitsuba wheels are amd64 ones.
 if [[ "$(uname -m)" != x86_64 ]]; then
     export COHERENT_REQUIRE_BROWSER=0
+    export COHERENT_REQUIRE_PEER=0
 fi
 # Libraries, binaries and test targets, then the doc tests: not the examples, which
 # `cargo test` would build too (clippy --all-targets checks that they compile) and which

@@ -14,6 +14,7 @@ pub mod accel_any;
 pub mod approx;
 pub mod bdf;
 pub mod camera;
+pub mod export;
 pub mod film;
 pub mod kernels;
 pub mod light;

@@ -36,6 +36,11 @@ enum Command {
     /// `GET /frame.png` is the current image, `GET /state` the figures as JSON. The render
     /// pauses when no request came for 10 s. Ctrl-C ends it.
     View(Box<ViewArgs>),
+    /// Write a scene for another renderer: `--mitsuba DIR` writes Mitsuba 3's scene
+    /// description (DIR/scene.xml, with the meshes as PLY and the textures as EXR) of the part
+    /// of the scene both renderers compute alike, and lists every feature it left out, with
+    /// the reason.
+    Export(Box<ExportArgs>),
     /// List the built-in scenes and the scene files of the repository's `scenes/` folder
     /// (or `$COHERENT_SCENES`).
     Scenes,
@@ -54,6 +59,7 @@ fn main() -> ExitCode {
         Command::Info { json } => info(json),
         Command::Render(args) => cli::render::run(&args),
         Command::View(args) => cli::view::run(&args),
+        Command::Export(args) => cli::export::run(&args),
         Command::Scenes => scenes(),
     };
     match result {
@@ -88,6 +94,19 @@ fn message(e: &anyhow::Error) -> String {
         text.push_str(&c);
     }
     text
+}
+
+/// What `coherent export` takes.
+#[derive(clap::Args, Debug)]
+struct ExportArgs {
+    /// A scene file (.toml), a built-in scene's name, or a bare mesh file.
+    scene: String,
+    /// The folder to write Mitsuba 3's scene into (created if needed).
+    #[arg(long)]
+    mitsuba: std::path::PathBuf,
+    /// Image size WxH (default: the scene's).
+    #[arg(long, value_parser = parse_resolution)]
+    resolution: Option<(u32, u32)>,
 }
 
 /// What `coherent render` takes.

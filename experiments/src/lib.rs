@@ -33,6 +33,7 @@ pub mod builds;
 mod factors;
 pub mod kernels;
 pub mod maps;
+pub mod peers;
 pub mod regroup;
 pub mod table1;
 pub mod table2;
@@ -57,4 +58,5 @@ pub const EXPERIMENTS: &[Experiment] = &[
     builds::EXPERIMENT,
     maps::EXPERIMENT,
     view::EXPERIMENT,
+    peers::EXPERIMENT,
 ];

@@ -1,5 +1,6 @@
 //! The `coherent` binary's subcommands that need more than a few lines.
 
+pub mod export;
 pub mod render;
 pub mod view;
 

@@ -8,6 +8,7 @@ mod batch;
 mod heatmap;
 mod matrix;
 mod output;
+pub use output::write_exr_rgb;
 mod progressive;
 mod render;
 mod spare;

@@ -71,6 +71,23 @@ impl Circular {
         self.strata.jitter()
     }
 
+    /// Centre, unit normal (the side it emits to) and radius.
+    pub fn disk(&self) -> (Vec3, Vec3, f32) {
+        (self.center, self.normal, self.radius)
+    }
+
+    /// Radiance (W/(m^2 sr) per channel).
+    pub fn radiance(&self) -> [f32; 3] {
+        self.radiance
+    }
+
+    /// The same disk with its points jittered (`true`) or fixed.
+    pub fn with_jitter(&self, jitter: bool) -> Self {
+        let mut c = self.clone();
+        c.strata = Strata::new(self.strata.count(), self.strata.seed(), jitter);
+        c
+    }
+
     #[inline(always)]
     pub fn sample<L: Lanes>(
         &self,

@@ -320,6 +320,17 @@ impl Environment {
         self.scale
     }
 
+    /// The map's x (phi = 0), y (phi = pi/2) and up axes in world space.
+    pub fn axes(&self) -> [Vec3; 3] {
+        self.axes
+    }
+
+    /// The map's radiance (before [`Environment::scale`]), rows top (theta = 0) to bottom,
+    /// `[r, g, b]` per texel.
+    pub fn texels(&self) -> impl Iterator<Item = [f32; 3]> + '_ {
+        self.map.texels.chunks_exact(4).map(|t| [t[0], t[1], t[2]])
+    }
+
     /// The same map with another sample count (at least 1).
     pub fn with_samples(mut self, samples: u32) -> Self {
         self.samples = samples.max(1);

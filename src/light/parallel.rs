@@ -29,6 +29,11 @@ impl Parallel {
         self.direction
     }
 
+    /// Irradiance on a surface facing the light (W/m^2 per channel).
+    pub fn irradiance(&self) -> [f32; 3] {
+        self.irradiance
+    }
+
     #[inline(always)]
     pub fn sample<L: Lanes>(
         &self,

@@ -77,6 +77,23 @@ impl Rectangular {
         self.strata.jitter()
     }
 
+    /// The corner and the two edges: the rectangle is `corner + s edge_u + t edge_v`.
+    pub fn frame(&self) -> (Vec3, Vec3, Vec3) {
+        (self.corner, self.edge_u, self.edge_v)
+    }
+
+    /// Radiance (W/(m^2 sr) per channel).
+    pub fn radiance(&self) -> [f32; 3] {
+        self.radiance
+    }
+
+    /// The same rectangle with its points jittered (`true`) or fixed.
+    pub fn with_jitter(&self, jitter: bool) -> Self {
+        let mut r = self.clone();
+        r.strata = Strata::new(self.strata.count(), self.strata.seed(), jitter);
+        r
+    }
+
     #[inline(always)]
     pub fn sample<L: Lanes>(
         &self,

@@ -206,6 +206,9 @@ pub(super) fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     }
     let h: Vec<&str> = header.iter().map(String::as_str).collect();
     md.push_str(&markdown_table(&h, &rows));
+    if let Some(peer) = crate::peers::table3_peer(ctx)? {
+        md.push_str(&peer);
+    }
 
     md.push_str(&targets(&t)?);
     if let Some(p) = ctx.plot_markdown("table3_speedup", "whole-frame speedup per scene") {
