@@ -79,7 +79,7 @@ fn specs(ctx: &Ctx) -> Vec<(String, String)> {
     let mut out: Vec<(String, String)> = ctx
         .pick(
             vec!["cornell"],
-            vec!["cornell", "spdemo", "glass1", "room2", "car", "city"],
+            vec!["cornell", "spdemo", "glass1", "room2"],
         )
         .into_iter()
         .map(|s| (s.to_string(), s.to_string()))
@@ -91,7 +91,6 @@ fn specs(ctx: &Ctx) -> Vec<(String, String)> {
             ("bunny", "glmark2-data/bunny.obj"),
             ("dragon", "libcgal-demo/ChineseDragon-10kv.off"),
             ("armadillo", "libcgal-demo/armadillo.off"),
-            ("elephant", "libcgal-demo/refined_elephant.off"),
         ],
     );
     for (name, file) in real {
@@ -122,8 +121,8 @@ fn run(ctx: &mut Ctx) -> anyhow::Result<()> {
         return Ok(());
     }
     let (w, h) = ctx.pick((256, 192), (1024, 768));
-    let rounds = ctx.pick(3, 7);
-    let converged = ctx.pick(16, 64);
+    let rounds = ctx.pick(3, 5);
+    let converged = ctx.pick(16, 32);
     let plan = Plan {
         builtins: true,
         scenes_dir: frames::scenes_dir(),
