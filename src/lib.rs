@@ -16,6 +16,7 @@ pub mod bdf;
 pub mod camera;
 pub mod export;
 pub mod film;
+pub mod illum;
 pub mod kernels;
 pub mod light;
 pub mod machine;

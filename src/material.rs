@@ -234,6 +234,18 @@ impl Material {
         Ok(())
     }
 
+    /// The diffuse albedo per lane, `kd tex` (the texture colour at `(s, t)` and mip level
+    /// `lod`, or white): what indirect light sees of the material. A tabulated BDF has no
+    /// albedo of its own here, so its material's Phong diffuse colour stands for it.
+    #[inline(always)]
+    pub fn albedo<L: Lanes>(&self, l: L, s: L::F32s, t: L::F32s, lod: L::F32s) -> Rgbs<L> {
+        let kd = rgb(l, self.phong.diffuse);
+        match &self.texture {
+            Some(tex) => tex.sample(l, s, t, lod) * kd,
+            None => kd,
+        }
+    }
+
     /// Shades every lane of `hits` with this material for light direction `wi`. Lanes
     /// outside `mask` are computed from whatever they hold and must be discarded by the
     /// caller ([`shade`] does).
