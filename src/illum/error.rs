@@ -21,4 +21,7 @@ pub enum IllumError {
     Options { what: &'static str, problem: String },
     #[error("illumination map {}: {problem}", path.display())]
     File { path: PathBuf, problem: String },
+    /// The lane backend asked for cannot run here.
+    #[error(transparent)]
+    Backend(#[from] coherent_simd::BackendError),
 }

@@ -81,6 +81,21 @@ impl Circular {
         self.radiance
     }
 
+    /// The two unit vectors spanning the disk's plane (angle 0 along the first).
+    pub fn tangents(&self) -> (Vec3, Vec3) {
+        (self.tangent, self.bitangent)
+    }
+
+    /// The polar grid of points: (rings, sectors).
+    pub fn grid(&self) -> (u32, u32) {
+        (self.rings, self.sectors)
+    }
+
+    /// The points' strata.
+    pub fn strata(&self) -> &Strata {
+        &self.strata
+    }
+
     /// The same disk with its points jittered (`true`) or fixed.
     pub fn with_jitter(&self, jitter: bool) -> Self {
         let mut c = self.clone();

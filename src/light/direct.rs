@@ -27,6 +27,20 @@ impl Direct {
         })
     }
 
+    pub fn position(&self) -> Vec3 {
+        self.position
+    }
+
+    /// The unit axis of the half-space the light radiates into.
+    pub fn axis(&self) -> Vec3 {
+        self.axis
+    }
+
+    /// Intensity along the axis (W/sr per channel).
+    pub fn intensity(&self) -> [f32; 3] {
+        self.intensity
+    }
+
     #[inline(always)]
     pub fn sample<L: Lanes>(
         &self,

@@ -169,6 +169,35 @@ impl Goniodiagram {
         &self.grid
     }
 
+    pub fn position(&self) -> Vec3 {
+        self.position
+    }
+
+    /// The luminaire's x, y, z (up) axes in world space.
+    pub fn axes(&self) -> [Vec3; 3] {
+        self.axes
+    }
+
+    /// The photometric type (which angles the table is over).
+    pub fn kind(&self) -> PhotometricType {
+        self.kind
+    }
+
+    /// W/sr per candela, per channel.
+    pub fn scale(&self) -> [f32; 3] {
+        self.scale
+    }
+
+    /// How a lane's table cell is found.
+    pub fn lookup(&self) -> GonioLookup {
+        self.lookup
+    }
+
+    /// The table resampled onto a uniform grid ([`GonioLookup::Uniform`] reads it).
+    pub fn uniform_table(&self) -> &UniformTable {
+        &self.uniform
+    }
+
     /// Candela towards world directions `d` (unit, away from the light), per lane.
     #[inline(always)]
     pub fn candela<L: Lanes>(&self, l: L, d: &Vec3s<L>) -> L::F32s {
@@ -362,6 +391,18 @@ impl UniformTable {
     /// [`UniformTable::eval`] for one point (scalar backend).
     pub fn eval1(&self, x: [f32; 2]) -> f32 {
         self.eval(coherent_simd::scalar::Scalar, x)
+    }
+
+    /// The nodes along axis `k` (0: plane, 1: angle; radians).
+    pub fn nodes(&self, k: usize) -> Vec<f32> {
+        (0..self.len[k])
+            .map(|i| self.start[k] + i as f32 / self.inv_step[k])
+            .collect()
+    }
+
+    /// The values at the nodes, plane-major (`len(0) * len(1)` of them).
+    pub fn node_values(&self) -> &[f32] {
+        &self.values[..self.len[0] * self.len[1]]
     }
 }
 

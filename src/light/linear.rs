@@ -52,6 +52,21 @@ impl Linear {
         self.strata.jitter()
     }
 
+    /// The segment's ends.
+    pub fn ends(&self) -> (Vec3, Vec3) {
+        (self.a, self.b)
+    }
+
+    /// Intensity of the whole segment (W/sr per channel).
+    pub fn intensity(&self) -> [f32; 3] {
+        self.intensity
+    }
+
+    /// The points' strata.
+    pub fn strata(&self) -> &Strata {
+        &self.strata
+    }
+
     #[inline(always)]
     pub fn sample<L: Lanes>(
         &self,

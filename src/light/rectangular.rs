@@ -87,6 +87,21 @@ impl Rectangular {
         self.radiance
     }
 
+    /// The grid of points: (nu, nv) along `edge_u` and `edge_v`.
+    pub fn grid(&self) -> (u32, u32) {
+        (self.nu, self.strata.count() / self.nu)
+    }
+
+    /// Unit normal (the side it emits to) and area.
+    pub fn normal_area(&self) -> (Vec3, f32) {
+        (self.normal, self.area)
+    }
+
+    /// The points' strata.
+    pub fn strata(&self) -> &Strata {
+        &self.strata
+    }
+
     /// The same rectangle with its points jittered (`true`) or fixed.
     pub fn with_jitter(&self, jitter: bool) -> Self {
         let mut r = self.clone();

@@ -80,6 +80,25 @@ impl Spot {
         self
     }
 
+    pub fn position(&self) -> Vec3 {
+        self.position
+    }
+
+    /// The unit axis the spot is aimed along.
+    pub fn axis(&self) -> Vec3 {
+        self.axis
+    }
+
+    /// Intensity inside the inner cone (W/sr per channel).
+    pub fn intensity(&self) -> [f32; 3] {
+        self.intensity
+    }
+
+    /// The inner and outer cone half-angles (radians).
+    pub fn cone(&self) -> (f32, f32) {
+        (self.inner, self.outer)
+    }
+
     /// The falloff factor for the cosine of the angle to the axis, per lane.
     #[inline(always)]
     pub fn falloff<L: Lanes>(&self, l: L, cos_axis: L::F32s) -> L::F32s {
