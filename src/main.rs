@@ -179,6 +179,34 @@ struct RenderArgs {
     /// slows the frame; the split is for comparing stages, not for frame times.
     #[arg(long)]
     stages: bool,
+    /// Indirect light: `none` (direct light, mirror and refraction rays only), `imap` (an
+    /// illumination map of particles traced from the lights adds `albedo / pi * E` at every
+    /// hit) or `path` (path tracing's diffuse bounces: the unbiased reference, slow to
+    /// converge). The Phong specular lobe's share of indirect light is left out by both.
+    #[arg(long, default_value = "none")]
+    indirect: coherent::render::IndirectMode,
+    /// Particles traced to build the illumination map (`--indirect imap` only; default
+    /// 1000000). A map file that is loaded keeps the particles it was built with.
+    #[arg(long)]
+    particles: Option<u64>,
+    /// Cells the illumination map aims at over the scene's surfaces (`--indirect imap` only;
+    /// default 65536).
+    #[arg(long)]
+    imap_cells: Option<u64>,
+    /// How the map's particle rays are grouped into packets: single, packets, sorted
+    /// (by direction octant and origin) or octant (`--indirect imap` only; default sorted).
+    /// The map is the same whichever.
+    #[arg(long)]
+    imap_mode: Option<coherent::illum::Mode>,
+    /// The illumination map's file (`--indirect imap` only): loaded when it was made for this
+    /// scene and cells target, else built and written there. Default: beside the scene file
+    /// as `SCENE.imap.exr`, for a built-in scene beside the image as `IMAGE.imap.exr`.
+    #[arg(long)]
+    imap: Option<std::path::PathBuf>,
+    /// Diffuse bounces per path at most (`--indirect path` only; default 64; Russian
+    /// roulette ends most paths long before).
+    #[arg(long)]
+    max_bounces: Option<u32>,
     /// Render the frame N times in a row and report each frame's seconds and their median
     /// (as `reproduce` times frames; the image and statistics are the last frame's). The
     /// first frame of a run also pays for fresh memory.

@@ -1,7 +1,9 @@
 //! `coherent render` (paper section 7): load a scene, build the chosen accelerator, render
 //! with the chosen lane backend on a pool of T threads through the progressive film, write
 //! the image, and print one summary line (rays by kind, time, Mrays/s, active lanes per
-//! packet per stage and per ray depth, material passes per packet).
+//! packet per stage and per ray depth, material passes per packet). With `--indirect imap`
+//! the illumination map is loaded or built (and saved) first, and its time reported apart
+//! from the frame's.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -13,8 +15,13 @@ use coherent::accel_any::{AccelKind, AnyAccel, AnyParams};
 use coherent::film::{
     FilmOptions, Method, PassReport, scale_top, write_heatmap_png, write_map_exr,
 };
+use coherent::illum::{DEFAULT_CELLS, IllumMap, MapOptions, Mode};
 use coherent::median::median;
-use coherent::render::{AovBuffer, AovKind, Packets, RayKind, RenderStats, Renderer, render_frame};
+use coherent::render::indirect::DEFAULT_MAX_BOUNCES;
+use coherent::render::{
+    AovBuffer, AovKind, Indirect, IndirectMode, Packets, RayKind, RenderStats, Renderer,
+    render_frame,
+};
 use coherent::scene::RenderScene;
 use coherent::simd::Backend;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -34,6 +41,7 @@ fn check_args(args: &RenderArgs) -> anyhow::Result<(Backend, AccelKind)> {
         ),
     }
     super::threads_arg(args.threads)?;
+    check_indirect(args)?;
     // Fail before rendering, not after, when the image cannot be written.
     if let Some(dir) = args.out.parent()
         && !dir.as_os_str().is_empty()
@@ -46,6 +54,137 @@ fn check_args(args: &RenderArgs) -> anyhow::Result<(Backend, AccelKind)> {
         );
     }
     Ok((backend, kind))
+}
+
+/// Particles of a new illumination map unless `--particles` says otherwise.
+pub const DEFAULT_PARTICLES: u64 = 1_000_000;
+
+/// Checks the indirect-light flags: each map flag only with `--indirect imap` (an error, not
+/// a warning: a flag that would do nothing is a mistake in the command), `--max-bounces` only
+/// with `--indirect path`, and counts of at least 1.
+fn check_indirect(args: &RenderArgs) -> anyhow::Result<()> {
+    let mode = args.indirect;
+    let map_flags = [
+        ("--particles", args.particles.is_some()),
+        ("--imap-cells", args.imap_cells.is_some()),
+        ("--imap-mode", args.imap_mode.is_some()),
+        ("--imap", args.imap.is_some()),
+    ];
+    if mode != IndirectMode::Imap
+        && let Some((flag, _)) = map_flags.iter().find(|f| f.1)
+    {
+        bail!("{flag} sets up the illumination map: it needs --indirect imap (not {mode})");
+    }
+    if mode != IndirectMode::Path && args.max_bounces.is_some() {
+        bail!("--max-bounces limits path tracing: it needs --indirect path (not {mode})");
+    }
+    if args.particles == Some(0) {
+        bail!("--particles 0: the illumination map needs at least 1 particle");
+    }
+    if args.imap_cells == Some(0) {
+        bail!("--imap-cells 0: the illumination map needs at least 1 cell");
+    }
+    if args.max_bounces == Some(0) {
+        bail!("--max-bounces 0: a path needs at least 1 bounce (--indirect none has none)");
+    }
+    Ok(())
+}
+
+/// Where the illumination map lives: `--imap`, else beside the scene file as
+/// `SCENE.imap.exr`, else (a built-in scene) beside the image as `IMAGE.imap.exr`.
+pub fn imap_path(scene: &str, out: &Path, imap: Option<&Path>) -> PathBuf {
+    if let Some(p) = imap {
+        return p.to_path_buf();
+    }
+    let file = Path::new(scene);
+    let beside = if file.is_file() { file } else { out };
+    let stem = beside
+        .file_stem()
+        .map_or_else(|| "scene".into(), |s| s.to_string_lossy());
+    beside.with_file_name(format!("{stem}.imap.exr"))
+}
+
+/// The world bounds of every instance's triangles (where parallel and environment lights
+/// emit from).
+fn world_bounds(scene: &RenderScene) -> coherent::accel::Aabb {
+    let mut b = coherent::accel::Aabb::from_points(std::iter::empty());
+    for inst in &scene.instances {
+        if let Some(m) = scene.meshes.get(inst.mesh) {
+            b = b.union(m.mesh.bounds().transformed(&inst.world_from_object));
+        }
+    }
+    b
+}
+
+/// The illumination map for `--indirect imap`: loaded from its file when it was made for this
+/// scene and cells target, else built with a progress bar in `pool` and saved there. Says
+/// which, with the time it took.
+fn illumination_map(
+    args: &RenderArgs,
+    scene: &RenderScene,
+    accel: &AnyAccel,
+    backend: Backend,
+    pool: &rayon::ThreadPool,
+) -> anyhow::Result<IllumMap> {
+    let path = imap_path(&args.scene, &args.out, args.imap.as_deref());
+    let cells = args.imap_cells.unwrap_or(DEFAULT_CELLS);
+    let t = Instant::now();
+    if path.exists() {
+        let map = IllumMap::load(&path, scene, cells).map_err(|e| {
+            anyhow::anyhow!(
+                "{e}\n(delete {} to build the map again, or pass another --imap FILE)",
+                path.display()
+            )
+        })?;
+        println!(
+            "illumination map: loaded {} ({} cells, {} particles) in {:.3} s",
+            path.display(),
+            map.cells(),
+            map.particles(),
+            t.elapsed().as_secs_f64()
+        );
+        if let Some(p) = args.particles
+            && p != map.particles()
+        {
+            eprintln!(
+                "coherent: warning: --particles {p}: the map loaded from {} was built from {} \
+                 particles; delete it to build one from {p}",
+                path.display(),
+                map.particles()
+            );
+        }
+        return Ok(map);
+    }
+    let opts = MapOptions {
+        particles: args.particles.unwrap_or(DEFAULT_PARTICLES),
+        cells,
+        mode: args.imap_mode.unwrap_or(Mode::Sorted),
+        ..MapOptions::default()
+    };
+    opts.check()?;
+    let bar = progress_bar(args.quiet);
+    bar.set_length(opts.particles);
+    bar.set_message(format!("illumination map, {} particles", opts.particles));
+    let built = pool.install(|| {
+        coherent::illum::build_map(backend, scene, accel, &opts, &|done| bar.set_position(done))
+    });
+    bar.finish_and_clear();
+    let (map, st) =
+        built.with_context(|| format!("building the illumination map of {}", scene.name))?;
+    let seconds = t.elapsed().as_secs_f64();
+    map.save(&path)?;
+    println!(
+        "illumination map: built from {} particles ({} rays, {} packets, {:.1} Mrays/s) in \
+         {:.3} s, {} cells -> {}",
+        opts.particles,
+        st.rays(),
+        opts.mode,
+        st.rays() as f64 / seconds.max(1e-9) * 1e-6,
+        seconds,
+        map.cells(),
+        path.display()
+    );
+    Ok(map)
 }
 
 /// Loads the scene with the command line's overrides, validated, and merges its static
@@ -105,6 +244,22 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         None => scene.tonemap,
     };
     opts.validate()?;
+    if args.indirect == IndirectMode::Imap {
+        // No light to trace particles from, before building anything.
+        coherent::illum::Emitter::new(&scene, world_bounds(&scene))?;
+        let path = imap_path(&args.scene, &args.out, args.imap.as_deref());
+        if !path.exists()
+            && let Some(dir) = path.parent()
+            && !dir.as_os_str().is_empty()
+            && !dir.is_dir()
+        {
+            bail!(
+                "--imap {}: cannot write the illumination map there: the folder {} does not exist",
+                path.display(),
+                dir.display()
+            );
+        }
+    }
 
     let t_build = Instant::now();
     let mut params = AnyParams::of(kind);
@@ -121,14 +276,6 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
              (only the BSP's traversal is ours to count); `lanes` and `time` work with any"
         );
     }
-    let mut renderer = Renderer::new(&scene, accel, w, h).context("the scene's camera")?;
-    renderer.light_samples = args.light_samples;
-    renderer.regroup = args.regroup;
-    renderer.packets = args.packets;
-    renderer.time_stages = args.stages;
-    let aov = (!args.aov.is_empty()).then(|| Arc::new(AovBuffer::new(w, h)));
-    renderer.aov = aov.clone();
-
     let threads = args.threads.unwrap_or_else(|| {
         std::thread::available_parallelism()
             .map(|n| n.get())
@@ -142,6 +289,24 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .stack_size(64 << 20)
         .build()
         .context("starting the worker threads")?;
+
+    let indirect = match args.indirect {
+        IndirectMode::None => Indirect::None,
+        IndirectMode::Path => Indirect::Path {
+            max_bounces: args.max_bounces.unwrap_or(DEFAULT_MAX_BOUNCES),
+        },
+        IndirectMode::Imap => Indirect::Map(Arc::new(illumination_map(
+            args, &scene, &accel, backend, &pool,
+        )?)),
+    };
+    let mut renderer = Renderer::new(&scene, accel, w, h).context("the scene's camera")?;
+    renderer.indirect = indirect;
+    renderer.light_samples = args.light_samples;
+    renderer.regroup = args.regroup;
+    renderer.packets = args.packets;
+    renderer.time_stages = args.stages;
+    let aov = (!args.aov.is_empty()).then(|| Arc::new(AovBuffer::new(w, h)));
+    renderer.aov = aov.clone();
 
     let bar = progress_bar(args.quiet);
     let spp = match method {
@@ -182,7 +347,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let st = &rendered.stats;
     let rays = st.total_rays();
     println!(
-        "{}: {}x{} {} ({} triangles, {}), {} + {}{}, {} thread(s), {}: {:.3} s ({:.1} Mrays/s); rays: {}; \
+        "{}: {}x{} {} ({} triangles, {}), {} + {}{}{}, {} thread(s), {}: {:.3} s ({:.1} Mrays/s); rays: {}; \
          active lanes per packet (of {}): {}; by depth: {}; material passes per packet {:.2}; \
          build {:.3} s, {:.1} MB; load {:.3} s -> {}",
         scene.name,
@@ -194,6 +359,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         backend.name(),
         kind,
         packets_text(args),
+        indirect_text(args),
         threads,
         stop_text(&rendered),
         seconds.as_secs_f64(),
@@ -246,10 +412,23 @@ fn packets_text(args: &RenderArgs) -> &'static str {
     }
 }
 
-/// Rays traced per kind.
+/// The indirect light, for the summary line (nothing without).
+fn indirect_text(args: &RenderArgs) -> String {
+    match args.indirect {
+        IndirectMode::None => String::new(),
+        IndirectMode::Imap => ", indirect light from the map".into(),
+        IndirectMode::Path => format!(
+            ", indirect light path traced (at most {} bounces)",
+            args.max_bounces.unwrap_or(DEFAULT_MAX_BOUNCES)
+        ),
+    }
+}
+
+/// Rays traced per kind (diffuse bounces only when there were some).
 fn rays_text(st: &RenderStats) -> String {
     let kinds: Vec<String> = RayKind::ALL
         .iter()
+        .filter(|&&k| k.always_listed() || st.rays(k) > 0)
         .map(|&k| format!("{} {}", k.name(), st.rays(k)))
         .collect();
     kinds.join(", ")

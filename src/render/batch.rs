@@ -36,6 +36,7 @@ const FIELDS: usize = 23;
 struct Lane {
     f: [f32; FIELDS],
     light_id: i32,
+    id: i32,
     slot: i32,
 }
 
@@ -236,10 +237,15 @@ fn regroup<L: Lanes>(
     lanes: &mut Vec<Lane>,
 ) {
     let mut order: Vec<usize> = (0..generation.len()).collect();
-    // Stable: within a node, the batch's order.
-    order.sort_by_key(|&i| generation[i].path);
+    // Stable: within a node, the batch's order. The node's id decides; its other labels
+    // only keep two nodes apart if diffuse bounces' hashed ids ever met another's.
+    let node_of = |i: usize| {
+        let s = &generation[i];
+        (s.path, s.bounces, s.depth, s.kind as u8)
+    };
+    order.sort_by_key(|&i| node_of(i));
     let mut packed = Vec::new();
-    for node in order.chunk_by(|&a, &b| generation[a].path == generation[b].path) {
+    for node in order.chunk_by(|&a, &b| node_of(a) == node_of(b)) {
         lanes.clear();
         for &i in node {
             if generation[i].active.all() {
@@ -372,8 +378,10 @@ fn lift<L: Lanes>(seg: &Segment<L>, out: &mut Vec<Lane>) {
         v.store(a);
     }
     let mut light = [0i32; MAX_LANES];
+    let mut id = [0i32; MAX_LANES];
     let mut slot = [0i32; MAX_LANES];
     seg.light_ids.store(&mut light);
+    seg.ids.store(&mut id);
     seg.slot.store(&mut slot);
     let mut bits = seg.active.bitmask();
     while bits != 0 {
@@ -382,6 +390,7 @@ fn lift<L: Lanes>(seg: &Segment<L>, out: &mut Vec<Lane>) {
         let mut lane = Lane {
             f: [0.0; FIELDS],
             light_id: light[m],
+            id: id[m],
             slot: slot[m],
         };
         for (x, a) in lane.f.iter_mut().zip(&f) {
@@ -397,6 +406,7 @@ fn lift<L: Lanes>(seg: &Segment<L>, out: &mut Vec<Lane>) {
 fn pack<L: Lanes>(l: L, lanes: &[Lane], like: &Segment<L>) -> Segment<L> {
     let mut f = [[0.0f32; MAX_LANES]; FIELDS];
     let mut light = [0i32; MAX_LANES];
+    let mut id = [0i32; MAX_LANES];
     let mut slot = [0i32; MAX_LANES];
     let last = lanes.len() - 1;
     for m in 0..L::N {
@@ -405,6 +415,7 @@ fn pack<L: Lanes>(l: L, lanes: &[Lane], like: &Segment<L>) -> Segment<L> {
             a[m] = *x;
         }
         light[m] = lane.light_id;
+        id[m] = lane.id;
         slot[m] = lane.slot;
     }
     let mut v = [l.splat(0.0); FIELDS];
@@ -458,9 +469,11 @@ fn pack<L: Lanes>(l: L, lanes: &[Lane], like: &Segment<L>) -> Segment<L> {
             b: v[22],
         },
         depth: like.depth,
+        bounces: like.bounces,
         kind: like.kind,
         path: like.path,
         light_ids: l.load_i32(&light),
+        ids: l.load_i32(&id),
         slot: l.load_i32(&slot),
     }
 }

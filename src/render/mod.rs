@@ -11,6 +11,9 @@
 //! switch is on: then the reflection and refraction lanes of a whole batch of packets are
 //! compacted into full packets (`batch.rs`).
 //!
+//! Indirect light is off by default; the renderer's `indirect` setting adds it from an
+//! illumination map or by path tracing (`indirect.rs`).
+//!
 //! A frame from Rust, as `coherent render` makes it: a scene (a built-in scene's name, a scene
 //! file or a bare mesh), an accelerator chosen by name, the renderer, and the film on a lane
 //! backend chosen at run time. [`render_frame`] is not generic: it links the renderer compiled
@@ -39,6 +42,7 @@
 pub mod aov;
 mod batch;
 pub mod centres;
+pub mod indirect;
 pub mod light_samples;
 pub mod packets;
 pub mod rng;
@@ -56,6 +60,7 @@ use crate::scene::RenderScene;
 use crate::texture::lod_from_differentials;
 
 pub use aov::{AovBuffer, AovKind};
+pub use indirect::{Indirect, IndirectMode};
 pub use light_samples::LightSamples;
 pub use packets::Packets;
 use stats::StageClock;
@@ -90,6 +95,9 @@ pub struct Renderer<'s, A: Accel> {
     /// Per-pixel maps of what the packets did (`aov.rs`; off by default: it reads the clock
     /// per packet and counts the traversal's work).
     pub aov: Option<std::sync::Arc<AovBuffer>>,
+    /// Indirect light: none (the default: direct light and Whitted packets only), from an
+    /// illumination map, or path traced (`indirect.rs`).
+    pub indirect: Indirect,
     /// The image's width in pixels (for [`LightSamples::Tile`]).
     width: u32,
 }
@@ -101,13 +109,18 @@ struct Segment<L: Lanes> {
     diff: Differentials<L>,
     active: L::Mask,
     throughput: Rgbs<L>,
+    /// Mirror and refraction generations above this one (capped by the scene's depth).
     depth: u32,
+    /// Diffuse bounces above this one (path tracing's, capped on their own).
+    bounces: u32,
     kind: RayKind,
     /// Which node of the ray tree this is (root 1, children 2k and 2k+1): random-number
     /// streams hang off it.
     path: u32,
     /// The random-number ids of the light samples, per lane ([`LightSamples::ids`]).
     light_ids: L::I32s,
+    /// The samples' own ids (diffuse bounces draw their numbers from them).
+    ids: L::I32s,
     /// Where each lane's radiance goes: its sample's index in the batch (packet * lanes +
     /// lane; regrouped packets mix the lanes of several camera packets).
     slot: L::I32s,
@@ -143,6 +156,7 @@ impl<'s, A: Accel> Renderer<'s, A> {
             regroup: false,
             packets: Packets::Lanes,
             aov: None,
+            indirect: Indirect::None,
             width,
         })
     }
@@ -233,9 +247,11 @@ impl<'s, A: Accel> Renderer<'s, A> {
             active,
             throughput: Rgbs::splat(l, [1.0; 3]),
             depth: 0,
+            bounces: 0,
             kind: RayKind::Primary,
             path: 1,
             light_ids: self.light_samples.ids(l, xs, ys, ids, self.width),
+            ids,
             slot: l.lane_ids(),
         }
     }
@@ -261,7 +277,7 @@ impl<'s, A: Accel> Renderer<'s, A> {
         }
         let mut clock = StageClock::start(self.time_stages);
         stats.count(seg.kind, n_active);
-        stats.count_depth(seg.depth as usize, n_active);
+        stats.count_depth((seg.depth + seg.bounces) as usize, n_active);
         let dir = seg.rays.dir;
         let hits = match traced {
             Some(h) => *h,
@@ -287,11 +303,15 @@ impl<'s, A: Accel> Renderer<'s, A> {
         let hit = hits.hit_mask(l) & seg.active;
         let miss = seg.active.and_not(hit);
 
-        // Misses see the background and what the lights show of themselves (environment).
+        // Misses see the background and what the lights show of themselves (environment),
+        // but diffuse bounces only the background: the light passes at their origin counted
+        // the lights.
         if miss.any() {
             let mut bg = Rgbs::splat(l, self.scene.background);
-            for light in &self.scene.lights {
-                bg += light.radiance_seen(l, &dir);
+            if seg.kind != RayKind::Diffuse {
+                for light in &self.scene.lights {
+                    bg += light.radiance_seen(l, &dir);
+                }
             }
             *radiance += Rgbs::select(miss, seg.throughput * bg, Rgbs::zero(l));
         }
@@ -332,18 +352,42 @@ impl<'s, A: Accel> Renderer<'s, A> {
         // The material pass without a light: mip levels, ambient term, reflection and
         // refraction weights.
         let base = self.shade_materials(l, &mut ctx, Some(&surf), &ns, stats);
-        let mut lit = Rgbs::select(hit, base.ambient, Rgbs::zero(l));
+        // Below a diffuse bounce, a hit is lit as the illumination map's particles see it:
+        // diffusely, without its ambient term (see `indirect.rs`).
+        let bounced = seg.bounces > 0;
+        let mut lit = if bounced {
+            Rgbs::zero(l)
+        } else {
+            Rgbs::select(hit, base.ambient, Rgbs::zero(l))
+        };
+        // Indirect light sees the diffuse albedo (at the mip levels just found); a map gives
+        // it the irradiance at the hit.
+        let albedo = match self.indirect {
+            Indirect::None => Rgbs::zero(l),
+            _ => self.albedo_materials(l, &ctx, hit),
+        };
+        if let Indirect::Map(map) = &self.indirect {
+            let e = map.irradiance(l, hits.inst, hits.prim, hits.u, hits.v, hit);
+            let f = albedo.scale(l.splat(std::f32::consts::FRAC_1_PI));
+            lit += Rgbs::select(hit, f * e, Rgbs::zero(l));
+        }
         clock.lap(stats, Stage::Shading);
 
         // Each light, each of its samples, under its mask, with a shadow packet.
         let can_light = hit & ns.dot(wo).gt(zero);
         if can_light.any() {
+            let diffuse = bounced.then_some(&albedo);
             self.light_passes(
-                l, seg, &surf, &ns, can_light, &mut ctx, &mut lit, &mut clock, stats,
+                l, seg, &surf, &ns, can_light, diffuse, &mut ctx, &mut lit, &mut clock, stats,
             );
         }
         *radiance += seg.throughput * lit;
 
+        if let Indirect::Path { max_bounces } = self.indirect
+            && seg.bounces < max_bounces
+        {
+            self.spawn_diffuse(l, seg, &surf, &ns, &ng, &albedo, hit, pending);
+        }
         if seg.depth >= self.depth {
             clock.lap(stats, Stage::Other);
             return;
@@ -354,7 +398,8 @@ impl<'s, A: Accel> Renderer<'s, A> {
 
     /// Adds to `lit` what the lights give the lanes of `can_light`: each light, each of its
     /// samples, under its mask, with a shadow packet through the occlusion query and a
-    /// material pass for the lanes it reaches.
+    /// material pass for the lanes it reaches; with `diffuse` (an albedo), instead of the
+    /// material pass, the diffuse reflection of that albedo alone.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn light_passes<L: Lanes>(
@@ -364,6 +409,7 @@ impl<'s, A: Accel> Renderer<'s, A> {
         surf: &Surface<L>,
         ns: &Vec3s<L>,
         can_light: L::Mask,
+        diffuse: Option<&Rgbs<L>>,
         ctx: &mut ShadeHits<L>,
         lit: &mut Rgbs<L>,
         clock: &mut StageClock,
@@ -403,9 +449,14 @@ impl<'s, A: Accel> Renderer<'s, A> {
                 if visible.none() {
                     continue;
                 }
-                ctx.active = visible;
-                let s = self.shade_materials(l, ctx, None, &ls.wi, stats);
-                *lit += Rgbs::select(visible, s.reflected * ls.li, Rgbs::zero(l));
+                let reflected = if let Some(albedo) = diffuse {
+                    let cos = ls.wi.dot(*ns).max(l.splat(0.0));
+                    albedo.scale(cos * std::f32::consts::FRAC_1_PI)
+                } else {
+                    ctx.active = visible;
+                    self.shade_materials(l, ctx, None, &ls.wi, stats).reflected
+                };
+                *lit += Rgbs::select(visible, reflected * ls.li, Rgbs::zero(l));
                 clock.lap(stats, Stage::Shading);
             }
         }
@@ -456,9 +507,11 @@ impl<'s, A: Accel> Renderer<'s, A> {
                 active: refl_on,
                 throughput: seg.throughput * base.reflection,
                 depth: seg.depth + 1,
+                bounces: seg.bounces,
                 kind: RayKind::Reflection,
                 path: seg.path.wrapping_mul(2),
                 light_ids: seg.light_ids,
+                ids: seg.ids,
                 slot: seg.slot,
             });
         }
@@ -488,9 +541,11 @@ impl<'s, A: Accel> Renderer<'s, A> {
                     active: on,
                     throughput: seg.throughput * base.refraction,
                     depth: seg.depth + 1,
+                    bounces: seg.bounces,
                     kind: RayKind::Refraction,
                     path: seg.path.wrapping_mul(2) | 1,
                     light_ids: seg.light_ids,
+                    ids: seg.ids,
                     slot: seg.slot,
                 });
             }

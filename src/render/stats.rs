@@ -12,14 +12,19 @@ pub enum RayKind {
     Shadow = 1,
     Reflection = 2,
     Refraction = 3,
+    /// Diffuse bounces of the path tracer (`--indirect path`; none otherwise). Last, so the
+    /// other kinds keep their indices and columns.
+    Diffuse = 4,
 }
 
 impl RayKind {
-    pub const ALL: [RayKind; 4] = [
+    pub const COUNT: usize = 5;
+    pub const ALL: [RayKind; RayKind::COUNT] = [
         RayKind::Primary,
         RayKind::Shadow,
         RayKind::Reflection,
         RayKind::Refraction,
+        RayKind::Diffuse,
     ];
 
     pub fn name(self) -> &'static str {
@@ -28,7 +33,15 @@ impl RayKind {
             RayKind::Shadow => "shadow",
             RayKind::Reflection => "reflection",
             RayKind::Refraction => "refraction",
+            RayKind::Diffuse => "diffuse",
         }
+    }
+
+    /// Whether a summary lists this kind when none were traced: every kind but
+    /// [`RayKind::Diffuse`], which only indirect light traces (summaries of direct-light
+    /// frames stay as they were).
+    pub fn always_listed(self) -> bool {
+        self != RayKind::Diffuse
     }
 }
 
@@ -157,9 +170,9 @@ pub struct RenderStats {
     /// Lanes per packet of the backend that rendered.
     pub width: u32,
     /// Packets and active lanes per ray kind (the lanes are the rays traced).
-    pub kinds: [LaneCount; 4],
-    /// Packets and active lanes of every traced packet (primary, reflection, refraction) by
-    /// depth: index 0 = camera rays.
+    pub kinds: [LaneCount; RayKind::COUNT],
+    /// Packets and active lanes of every traced packet (primary, reflection, refraction,
+    /// diffuse) by depth in the ray tree: index 0 = camera rays.
     pub depth: Vec<LaneCount>,
     /// Material passes per shaded packet (the paper's one material at a time).
     pub materials: SplitCount,
@@ -286,7 +299,9 @@ impl RenderStats {
         let mut parts = Vec::new();
         for k in RayKind::ALL {
             let c = self.kinds[k as usize];
-            parts.push(format!("{} {}", k.name(), c.lanes));
+            if k.always_listed() || c.lanes > 0 {
+                parts.push(format!("{} {}", k.name(), c.lanes));
+            }
         }
         let mut lanes = Vec::new();
         for k in RayKind::ALL {
