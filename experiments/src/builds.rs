@@ -9,10 +9,15 @@
 //! nodes, subtrees in parallel), Embree at the quality the renderer asks of it, and obvhs.
 //! Beside the BSP's builds, its trees' quality: nodes, leaf references, depth and SAH cost
 //! (each object tree's, relative to its own root box, summed). `builds_presets.csv` then times
-//! the two presets' trees on the same rays (primary, shadow, diffuse; single rays and packets
+//! every preset's tree on the same rays (primary, shadow, diffuse; single rays and packets
 //! of the widest backend), interleaved, one thread, and checks that they give the same
 //! answers. `builds_phases.csv` splits each BSP build into its object trees, its top tree
-//! and the rest (triangle records).
+//! and the rest (triangle records). `builds.csv`'s last column is the BSP build's peak
+//! memory: the most bytes live at once during one more build, counted by this crate's
+//! allocator (which counts nothing outside that build).
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicBool, AtomicIsize, Ordering::Relaxed};
 
 use coherent::accel::{Accel, AccelError};
 use coherent::accel_any::{AccelKind, AnyAccel, AnyParams};
@@ -51,6 +56,7 @@ pub(crate) const HEADER: &[&str] = &[
     "leaf_refs",
     "max_depth",
     "sah_cost",
+    "build_peak_bytes",
 ];
 pub(crate) const PRESETS_FILE: &str = "builds_presets.csv";
 pub(crate) const PRESETS_HEADER: &[&str] = &[
@@ -137,6 +143,93 @@ fn timed<A: Accel + Send>(
     })
 }
 
+/// Whether [`Counting`] counts: only while [`peak_bytes`] measures a build, so every other
+/// allocation of every experiment pays one relaxed load and a branch, nothing more.
+static COUNTING: AtomicBool = AtomicBool::new(false);
+/// Bytes allocated less bytes freed since counting started (negative when the measured code
+/// frees what was allocated before it).
+static LIVE: AtomicIsize = AtomicIsize::new(0);
+/// The most [`LIVE`] has been since counting started.
+static PEAK: AtomicIsize = AtomicIsize::new(0);
+
+/// The system allocator, counting the bytes live while [`COUNTING`] is on: a build's peak
+/// working memory, which the resident size shows only coarsely (freed pages stay resident,
+/// fresh ones count only once touched). Memory that C libraries (Embree) allocate is not seen.
+struct Counting;
+
+impl Counting {
+    fn add(delta: isize) {
+        if COUNTING.load(Relaxed) {
+            let now = LIVE.fetch_add(delta, Relaxed) + delta;
+            PEAK.fetch_max(now, Relaxed);
+        }
+    }
+}
+
+// SAFETY: every call is forwarded to the system allocator unchanged; the counters only
+// observe.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
+        // SAFETY: the caller's contract, passed on.
+        let p = unsafe { System.alloc(l) };
+        if !p.is_null() {
+            Counting::add(l.size() as isize);
+        }
+        p
+    }
+
+    unsafe fn alloc_zeroed(&self, l: Layout) -> *mut u8 {
+        // SAFETY: the caller's contract, passed on.
+        let p = unsafe { System.alloc_zeroed(l) };
+        if !p.is_null() {
+            Counting::add(l.size() as isize);
+        }
+        p
+    }
+
+    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
+        Counting::add(-(l.size() as isize));
+        // SAFETY: the caller's contract, passed on.
+        unsafe { System.dealloc(p, l) }
+    }
+
+    unsafe fn realloc(&self, p: *mut u8, l: Layout, new_size: usize) -> *mut u8 {
+        // SAFETY: the caller's contract, passed on.
+        let q = unsafe { System.realloc(p, l, new_size) };
+        if !q.is_null() {
+            Counting::add(new_size as isize - l.size() as isize);
+        }
+        q
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: Counting = Counting;
+
+/// The most bytes live at once while `f` ran, over those live when it started (every
+/// thread's allocations count), and what `f` returned. One measurement at a time.
+pub(crate) fn peak_bytes<T>(f: impl FnOnce() -> T) -> (T, usize) {
+    LIVE.store(0, Relaxed);
+    PEAK.store(0, Relaxed);
+    COUNTING.store(true, Relaxed);
+    let out = f();
+    COUNTING.store(false, Relaxed);
+    (out, PEAK.load(Relaxed).max(0) as usize)
+}
+
+/// The peak bytes ([`peak_bytes`]) of one more BSP build of `scene` with `preset` in a pool
+/// of `threads` threads, the finished structure included.
+fn build_peak(
+    threads: usize,
+    scene: &coherent::accel::Scene,
+    preset: BuildPreset,
+) -> anyhow::Result<usize> {
+    let pool = crate::frames::pool(threads)?;
+    let (b, peak) = pool.install(|| peak_bytes(|| Bsp::build(scene, &bsp_params(preset))));
+    b?;
+    Ok(peak)
+}
+
 /// The thread counts measured: one, and every core when there are more.
 fn thread_counts() -> Vec<usize> {
     let all = std::thread::available_parallelism().map_or(1, |n| n.get());
@@ -186,6 +279,7 @@ fn run_scene(
                 Bsp::build(&s.scene, &bsp_params(preset))
             })?;
             let q = TreeQuality::of(&b);
+            let peak = build_peak(threads, &s.scene, preset)?;
             out.row(&[
                 &s.name,
                 &"bsp",
@@ -198,6 +292,7 @@ fn run_scene(
                 &q.leaf_refs,
                 &q.max_depth,
                 &format!("{:.4}", q.sah_cost),
+                &peak,
             ])?;
             let trees_s: f64 = b
                 .mesh_trees()
@@ -303,6 +398,7 @@ fn other_row(
         &"",
         &"",
         &"",
+        &"",
     ])
 }
 
@@ -392,7 +488,7 @@ fn report(ctx: &Ctx) -> anyhow::Result<Option<String>> {
     );
     let mut md = format!(
         "Builds (`{FILE}`): the median of a few builds per structure, on {one} thread and \
-         on {all}; the BSP with both build presets. `exact` sweeps every candidate plane at \
+         on {all}; the BSP with every build preset. `exact` sweeps every candidate plane at \
          every node; `fast` bins the SAH at large nodes and builds their subtrees in \
          parallel. SAH cost: each object tree's, relative to its own root box, summed.\n\n"
     );
@@ -529,6 +625,17 @@ fn binned_report(
         };
         let fmt = |r: Option<f64>| r.map_or("—".to_owned(), |r| format!("{r:.2}x"));
         let sah_ratio = ratio(sah("binned"), sah("exact"));
+        // The build's peak bytes over the finished structure's, the worse thread count.
+        let peak = [one, all]
+            .iter()
+            .filter_map(|th| {
+                let key = [s.as_str(), "bsp", "binned", th];
+                ratio(
+                    cell(t, key, "build_peak_bytes"),
+                    cell(t, key, "memory_bytes"),
+                )
+            })
+            .max_by(f64::total_cmp);
         rows.push(vec![
             s.clone(),
             num(Some(b1)),
@@ -537,7 +644,17 @@ fn binned_report(
             fmt(ratio(Some(b1), e1)),
             fmt(ratio(ba, ea)),
             sah_ratio.map_or("—".to_owned(), |r| format!("{:+.1} %", 100.0 * (r - 1.0))),
+            fmt(peak),
         ]);
+        if let Some(r) = peak {
+            checks.push(Check::at_most(
+                &s,
+                "bsp binned build's peak memory <= 2x the structure's bytes",
+                format!("{r:.2}x"),
+                r,
+                2.0,
+            ));
+        }
         if let Some(r) = ratio(Some(b1), e1) {
             checks.push(Check::at_most(
                 &s,
@@ -581,6 +698,7 @@ fn binned_report(
         format!("binned / embree, {one} thr."),
         format!("binned / embree, {all} thr."),
         "SAH binned vs exact".to_owned(),
+        "build peak / structure bytes".to_owned(),
     ];
     let h: Vec<&str> = h.iter().map(String::as_str).collect();
     md.push_str(&markdown_table(&h, &rows));
@@ -663,7 +781,7 @@ mod tests {
         for (accel, preset, threads, ms, sah) in rows {
             let bytes = if accel == "bsp" { 3000 } else { 1000 };
             out.row(&[
-                &"mesh", &accel, &preset, &threads, &ms, &bytes, &100, &"", &"", &"", &sah,
+                &"mesh", &accel, &preset, &threads, &ms, &bytes, &100, &"", &"", &"", &sah, &"",
             ])
             .unwrap();
         }

@@ -160,7 +160,7 @@ impl SahParams {
             leaf_size: 4,
             perfect_splits: true,
             leaf_group: 1,
-            build: BuildPreset::Exact,
+            build: BuildPreset::default(),
             bins: 32,
             sweep_below: 256,
             flat_sweep_below: 96,

@@ -60,6 +60,9 @@ impl Outputs {
 /// Each accelerator's renderer over the scene, in the order of the accelerators asked for.
 type Renderers<'s> = Vec<(AccelKind, Renderer<'s, AnyAccel>)>;
 
+/// A renderer over the BSP built with one more preset, and the build's seconds.
+type Built<'s> = (Renderer<'s, AnyAccel>, f64);
+
 /// Per (index into the renderers, backend).
 type PerFrame<T> = BTreeMap<(usize, Backend), T>;
 
@@ -90,14 +93,14 @@ impl SceneRun<'_> {
         out: &mut Outputs,
         skipped: &mut Vec<(String, String)>,
     ) -> anyhow::Result<()> {
-        let (mut renderers, build_secs, fast) = self.renderers(ctx, accels, skipped)?;
+        let (mut renderers, build_secs, presets) = self.renderers(ctx, accels, skipped)?;
         if renderers.first().map(|(k, _)| *k) != Some(AccelKind::Bsp) {
             return Ok(());
         }
         let first = self.first_frames(ctx, &renderers)?;
         let seconds = self.timed_frames(&renderers)?;
         self.frame_rows(&mut out.frames, &renderers, &first, &seconds)?;
-        self.build_rows(&mut out.builds, &renderers, &build_secs, fast.as_ref())?;
+        self.build_rows(&mut out.builds, &renderers, &build_secs, &presets)?;
         // Table 3 explained: arithmetic, culling, lanes and beams, each alone.
         factors::measure(
             &mut out.factors,
@@ -119,34 +122,33 @@ impl SceneRun<'_> {
         Ok(())
     }
 
-    /// The renderers of `accels` with their build times, and the BSP's `fast` preset's with
-    /// its build time (for the builds table only: the frames use the default preset, as
+    /// The renderers of `accels` with their build times, and the BSP built with each of the
+    /// other presets ([`BuildPreset::ALL`] but the default) with its build time, timed as the
+    /// default's is (for the builds table only: the frames use the default preset, as
     /// `coherent render` does).
-    #[allow(clippy::type_complexity)]
     fn renderers(
         &self,
         ctx: &mut Ctx,
         accels: &[AccelKind],
         skipped: &mut Vec<(String, String)>,
-    ) -> anyhow::Result<(
-        Renderers<'_>,
-        Vec<f64>,
-        Option<(Renderer<'_, AnyAccel>, f64)>,
-    )> {
+    ) -> anyhow::Result<(Renderers<'_>, Vec<f64>, Vec<Built<'_>>)> {
         let (name, scene) = (self.name, self.scene);
         let mut renderers = Vec::new();
         let mut build_secs = Vec::new();
-        let mut fast = None;
+        let mut presets = Vec::new();
         for &kind in accels {
             match frames::renderer_timed(scene, kind) {
                 Ok((r, build_s)) => {
                     if kind == AccelKind::Bsp {
-                        let mut params = AnyParams::of(kind);
-                        params.bsp.object.build = BuildPreset::Fast;
-                        let start = std::time::Instant::now();
-                        let a = AnyAccel::build(&scene.accel_scene(), &params)?;
-                        let fast_s = start.elapsed().as_secs_f64();
-                        fast = Some((Renderer::new(scene, a, scene.width, scene.height)?, fast_s));
+                        let default = AnyParams::of(kind).bsp.object.build;
+                        for preset in BuildPreset::ALL.into_iter().filter(|&p| p != default) {
+                            let mut params = AnyParams::of(kind);
+                            params.bsp.object.build = preset;
+                            let start = std::time::Instant::now();
+                            let a = AnyAccel::build(&scene.accel_scene(), &params)?;
+                            let s = start.elapsed().as_secs_f64();
+                            presets.push((Renderer::new(scene, a, scene.width, scene.height)?, s));
+                        }
                     }
                     build_secs.push(build_s);
                     renderers.push((kind, r));
@@ -158,7 +160,7 @@ impl SceneRun<'_> {
                 }
             }
         }
-        Ok((renderers, build_secs, fast))
+        Ok((renderers, build_secs, presets))
     }
 
     /// Untimed frames: the images (PSNR against scalar + BSP, whose image is written) and
@@ -241,13 +243,13 @@ impl SceneRun<'_> {
     }
 
     /// The builds, each with the time of a frame on its tree at the widest backend: every
-    /// structure's frames in rounds, the fast preset's tree among them.
+    /// structure's frames in rounds, the BSP's other presets' trees among them.
     fn build_rows(
         &self,
         csv: &mut CsvOut,
         renderers: &Renderers<'_>,
         build_secs: &[f64],
-        fast: Option<&(Renderer<'_, AnyAccel>, f64)>,
+        presets: &[Built<'_>],
     ) -> anyhow::Result<()> {
         let widest = Some(frames::widest())
             .filter(|b| self.backends.contains(b))
@@ -257,9 +259,7 @@ impl SceneRun<'_> {
             .zip(build_secs)
             .map(|((_, r), &s)| (r, s))
             .collect();
-        if let Some((r, s)) = fast {
-            built.push((r, *s));
-        }
+        built.extend(presets.iter().map(|(r, s)| (r, *s)));
         let mut frame_secs = vec![Vec::with_capacity(ROUNDS); built.len()];
         for _ in 0..ROUNDS {
             for (i, (r, _)) in built.iter().enumerate() {

@@ -13,19 +13,31 @@ use crate::targets::{Check, condensed};
 const MANY_OBJECTS: &str = "city";
 
 /// The report's builds section: per scene, each build's seconds and the time to a first
-/// image (build plus one frame at the widest backend), the presets' SAH costs, and the
-/// many-object scene's targets against Embree.
+/// image (build plus one frame at the widest backend) with every BSP preset the file has, the
+/// presets' SAH costs against `exact`'s, which preset gives the shortest time to a first image
+/// and each preset's total over the scenes, and the many-object scene's targets against
+/// Embree.
 fn builds_md(b: &Table, frames: &Table) -> anyhow::Result<String> {
-    let mut md = String::from(
+    let default = coherent::bsp::BuildPreset::default().name();
+    let mut md = format!(
         "\nBuilds and the time to a first image (`table3_builds.csv`): each structure built \
          over the scene's objects once the static instances are merged per transform (as \
          `coherent render` does unless told `--no-merge`), then one frame on it at the widest \
-         backend, one thread (median of the rounds). The BSP builds on every core with both \
-         presets (the frames above use `exact`), Embree on one thread, as the renderer asks. \
+         backend, one thread (median of the rounds). The BSP builds on every core with every \
+         preset (the frames above use `{default}`), Embree on one thread, as the renderer asks. \
          SAH: each BSP object tree's cost relative to its root box, summed.\n\n",
     );
+    let bsp_presets: Vec<&str> = coherent::bsp::BuildPreset::ALL
+        .iter()
+        .map(|p| p.name())
+        .filter(|p| find(b, &[("accel", "bsp"), ("preset", p)]).is_ok_and(|r| r.is_some()))
+        .collect();
     let mut rows = Vec::new();
-    let mut fast_wins = (0, 0);
+    // Per preset: the scenes where it gives the shortest time to a first image, and its sum
+    // of those times over the scenes that have every preset.
+    let mut wins = vec![0usize; bsp_presets.len()];
+    let mut totals = vec![0.0f64; bsp_presets.len()];
+    let mut complete = 0usize;
     let mut checks = Vec::new();
     for scene in b.distinct("scene")? {
         let get = |accel: &str, preset: &str| -> anyhow::Result<Option<(f64, f64, f64)>> {
@@ -43,37 +55,48 @@ fn builds_md(b: &Table, frames: &Table) -> anyhow::Result<String> {
                 },
             )
         };
-        let (exact, fast, embree) = (
-            get("bsp", "exact")?,
-            get("bsp", "fast")?,
-            get("embree", "default")?,
-        );
+        let bsp = bsp_presets
+            .iter()
+            .map(|p| get("bsp", p))
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        let embree = get("embree", "default")?;
+        let exact = get("bsp", "exact")?;
         let r0 = b.rows_where("scene", &scene)?[0];
         let both = |v: Option<(f64, f64, f64)>| {
             v.map_or("—".to_owned(), |(bs, fs, _)| {
                 format!("{} + {} s", fmt_num(bs), fmt_num(fs))
             })
         };
-        if let (Some(x), Some(f)) = (exact, fast) {
-            fast_wins.1 += 1;
-            if f.0 + f.1 < x.0 + x.1 {
-                fast_wins.0 += 1;
+        let firsts: Option<Vec<f64>> = bsp.iter().map(|v| v.map(|(bs, fs, _)| bs + fs)).collect();
+        if let Some(firsts) = firsts.filter(|f| !f.is_empty()) {
+            complete += 1;
+            let best = (0..firsts.len())
+                .min_by(|&i, &j| firsts[i].total_cmp(&firsts[j]))
+                .expect("a preset");
+            wins[best] += 1;
+            for (t, f) in totals.iter_mut().zip(&firsts) {
+                *t += f;
             }
         }
-        rows.push(vec![
+        let mut row = vec![
             scene.clone(),
             b.get(r0, "objects")?.to_owned(),
             b.get(r0, "triangles")?.to_owned(),
-            both(exact),
-            both(fast),
-            both(embree),
-            match (exact, fast) {
+        ];
+        row.extend(bsp.iter().map(|&v| both(v)));
+        row.push(both(embree));
+        for (p, v) in bsp_presets.iter().zip(&bsp) {
+            if *p == "exact" {
+                continue;
+            }
+            row.push(match (exact, v) {
                 (Some(x), Some(f)) if x.2 > 0.0 => format!("{:+.1} %", 100.0 * (f.2 / x.2 - 1.0)),
                 _ => "—".to_owned(),
-            },
-        ]);
+            });
+        }
+        rows.push(row);
         if scene == MANY_OBJECTS {
-            if let (Some(x), Some(e)) = (exact, embree) {
+            if let (Some(x), Some(e)) = (get("bsp", default)?, embree) {
                 checks.push(Check::at_most(
                     &scene,
                     "bsp build <= 1.5x embree's",
@@ -103,22 +126,32 @@ fn builds_md(b: &Table, frames: &Table) -> anyhow::Result<String> {
             }
         }
     }
-    md.push_str(&markdown_table(
-        &[
-            "scene",
-            "objects",
-            "triangles",
-            "bsp exact: build + frame",
-            "bsp fast: build + frame",
-            "embree: build + frame",
-            "SAH fast vs exact",
-        ],
-        &rows,
-    ));
-    md.push_str(&format!(
-        "\nThe fast preset gives the shorter time to a first image on {} of {} scenes.\n",
-        fast_wins.0, fast_wins.1
-    ));
+    let mut header = vec!["scene".to_owned(), "objects".into(), "triangles".into()];
+    header.extend(
+        bsp_presets
+            .iter()
+            .map(|p| format!("bsp {p}: build + frame")),
+    );
+    header.push("embree: build + frame".into());
+    header.extend(
+        bsp_presets
+            .iter()
+            .filter(|&&p| p != "exact")
+            .map(|p| format!("SAH {p} vs exact")),
+    );
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
+    md.push_str(&markdown_table(&header, &rows));
+    if complete > 0 {
+        let each: Vec<String> = bsp_presets
+            .iter()
+            .zip(wins.iter().zip(&totals))
+            .map(|(p, (w, t))| format!("`{p}` on {w} ({} s in all)", fmt_num(*t)))
+            .collect();
+        md.push_str(&format!(
+            "\nThe shortest time to a first image, of the {complete} scenes with every preset: {}.\n",
+            each.join(", ")
+        ));
+    }
     if !checks.is_empty() {
         md.push_str("\nThe many-object scene against Embree:\n\n");
         md.push_str(&condensed("scene", &checks));
