@@ -31,6 +31,7 @@ pub mod aa;
 pub mod accel;
 pub mod builds;
 mod factors;
+pub mod imaps;
 pub mod kernels;
 pub mod maps;
 pub mod peers;
@@ -59,4 +60,5 @@ pub const EXPERIMENTS: &[Experiment] = &[
     maps::EXPERIMENT,
     view::EXPERIMENT,
     peers::EXPERIMENT,
+    imaps::EXPERIMENT,
 ];
