@@ -73,6 +73,10 @@ pub struct MapOptions {
     pub count_work: bool,
     /// Particle ids per chunk: a thread's buffer of rays.
     pub chunk: usize,
+    /// Keep the particles whose first bounce is a mirror reflection or a refraction
+    /// (caustics). Without them the map holds only the light a path tracer whose lights are
+    /// not geometry can find, which is how it is checked against one.
+    pub caustics: bool,
 }
 
 impl Default for MapOptions {
@@ -85,6 +89,7 @@ impl Default for MapOptions {
             max_generations: DEFAULT_MAX_GENERATIONS,
             count_work: false,
             chunk: DEFAULT_CHUNK,
+            caustics: true,
         }
     }
 }
@@ -544,6 +549,9 @@ impl Pass<'_> {
                 return None;
             }
             (w, albedo, probs[0], gf)
+        } else if generation == 0 && !self.opts.caustics {
+            // A mirror or refraction first: a caustic, left out.
+            return None;
         } else if xi < probs[0] + probs[1] {
             let r = dir - ns * (2.0 * dir.dot(ns));
             let side = if ng.dot(r) < 0.0 { -ng } else { ng };

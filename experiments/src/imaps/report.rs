@@ -335,7 +335,8 @@ fn frames_md(t: &Table, checks: &mut Vec<Check>) -> anyhow::Result<String> {
     let mut md = format!(
         "\n**Frames** (`{}`): {} x {} at {} sample(s) per pixel, {}, BSP, one thread, direct \
          light only and with the map's indirect light (the map of {} particles built before, \
-         every thread; its seconds beside), medians of {} interleaved rounds. On cornell, the \
+         every thread, without caustics: particles whose first bounce is a mirror or glass, \
+         whose light the path tracer cannot find, are left out; its seconds beside), medians of {} interleaved rounds. On cornell, the \
          map's image against a path-traced reference of {} samples per pixel (two independent \
          halves): the mean absolute difference of 8 x 8 block means, and the reference's own \
          noise there (half the mean absolute difference of its halves' blocks), both relative \
