@@ -16,13 +16,11 @@
 //! memory: the most bytes live at once during one more build, counted by this crate's
 //! allocator (which counts nothing outside that build).
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicBool, AtomicIsize, Ordering::Relaxed};
-
 use coherent::accel::{Accel, AccelError};
 use coherent::accel_any::{AccelKind, AnyAccel, AnyParams};
 use coherent::bsp::{Bsp, BspParams, BuildPreset};
 use coherent::simd::Backend;
+use coherent_accel::alloc_count::{CountingAlloc, peak_bytes};
 use coherent_accel::scenes::{BuiltinScene, SceneSize};
 use coherent_accel::workload::RayKind;
 
@@ -143,79 +141,10 @@ fn timed<A: Accel + Send>(
     })
 }
 
-/// Whether [`Counting`] counts: only while [`peak_bytes`] measures a build, so every other
-/// allocation of every experiment pays one relaxed load and a branch, nothing more.
-static COUNTING: AtomicBool = AtomicBool::new(false);
-/// Bytes allocated less bytes freed since counting started (negative when the measured code
-/// frees what was allocated before it).
-static LIVE: AtomicIsize = AtomicIsize::new(0);
-/// The most [`LIVE`] has been since counting started.
-static PEAK: AtomicIsize = AtomicIsize::new(0);
-
-/// The system allocator, counting the bytes live while [`COUNTING`] is on: a build's peak
-/// working memory, which the resident size shows only coarsely (freed pages stay resident,
-/// fresh ones count only once touched). Memory that C libraries (Embree) allocate is not seen.
-struct Counting;
-
-impl Counting {
-    fn add(delta: isize) {
-        if COUNTING.load(Relaxed) {
-            let now = LIVE.fetch_add(delta, Relaxed) + delta;
-            PEAK.fetch_max(now, Relaxed);
-        }
-    }
-}
-
-// SAFETY: every call is forwarded to the system allocator unchanged; the counters only
-// observe.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
-        // SAFETY: the caller's contract, passed on.
-        let p = unsafe { System.alloc(l) };
-        if !p.is_null() {
-            Counting::add(l.size() as isize);
-        }
-        p
-    }
-
-    unsafe fn alloc_zeroed(&self, l: Layout) -> *mut u8 {
-        // SAFETY: the caller's contract, passed on.
-        let p = unsafe { System.alloc_zeroed(l) };
-        if !p.is_null() {
-            Counting::add(l.size() as isize);
-        }
-        p
-    }
-
-    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
-        Counting::add(-(l.size() as isize));
-        // SAFETY: the caller's contract, passed on.
-        unsafe { System.dealloc(p, l) }
-    }
-
-    unsafe fn realloc(&self, p: *mut u8, l: Layout, new_size: usize) -> *mut u8 {
-        // SAFETY: the caller's contract, passed on.
-        let q = unsafe { System.realloc(p, l, new_size) };
-        if !q.is_null() {
-            Counting::add(new_size as isize - l.size() as isize);
-        }
-        q
-    }
-}
-
+// Peak build memory: every allocation of the experiments counted while a build is measured
+// (`coherent_accel::alloc_count`).
 #[global_allocator]
-static ALLOCATOR: Counting = Counting;
-
-/// The most bytes live at once while `f` ran, over those live when it started (every
-/// thread's allocations count), and what `f` returned. One measurement at a time.
-pub(crate) fn peak_bytes<T>(f: impl FnOnce() -> T) -> (T, usize) {
-    LIVE.store(0, Relaxed);
-    PEAK.store(0, Relaxed);
-    COUNTING.store(true, Relaxed);
-    let out = f();
-    COUNTING.store(false, Relaxed);
-    (out, PEAK.load(Relaxed).max(0) as usize)
-}
+static ALLOCATOR: CountingAlloc = CountingAlloc;
 
 /// The peak bytes ([`peak_bytes`]) of one more BSP build of `scene` with `preset` in a pool
 /// of `threads` threads, the finished structure included.

@@ -17,6 +17,7 @@
 
 pub mod aabb;
 pub mod accel;
+pub mod alloc_count;
 pub mod brute;
 pub mod edges;
 pub mod error;

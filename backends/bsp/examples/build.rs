@@ -24,8 +24,7 @@
 //! parameters.
 //! ```
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicBool, AtomicIsize, Ordering::Relaxed};
+use coherent_accel::alloc_count::{CountingAlloc, peak_bytes};
 
 use coherent_accel::scenes::View;
 use coherent_accel::scenes::{self, SceneSize};
@@ -148,79 +147,8 @@ fn view_of(bsp: &Bsp) -> (View, Vec3) {
     (view, c + Vec3::new(0.6, 1.5, 0.4) * r)
 }
 
-/// Whether [`Counting`] counts: only during the one build per row that measures the peak,
-/// so the timed builds pay a relaxed load per allocation and nothing more.
-static COUNTING: AtomicBool = AtomicBool::new(false);
-/// Bytes allocated less bytes freed since counting started (negative when the build frees
-/// what was allocated before it).
-static LIVE: AtomicIsize = AtomicIsize::new(0);
-/// The most [`LIVE`] has been since counting started.
-static PEAK: AtomicIsize = AtomicIsize::new(0);
-
-/// The system allocator, counting the bytes live while [`COUNTING`] is on: the build's peak
-/// working memory, which the operating system's resident size shows only coarsely (freed
-/// pages stay resident, fresh ones are not resident until touched).
-struct Counting;
-
-impl Counting {
-    fn add(delta: isize) {
-        if COUNTING.load(Relaxed) {
-            let now = LIVE.fetch_add(delta, Relaxed) + delta;
-            PEAK.fetch_max(now, Relaxed);
-        }
-    }
-}
-
-// SAFETY: every call is forwarded to the system allocator unchanged; the counters only
-// observe.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
-        // SAFETY: the caller's contract, passed on.
-        let p = unsafe { System.alloc(l) };
-        if !p.is_null() {
-            Counting::add(l.size() as isize);
-        }
-        p
-    }
-
-    unsafe fn alloc_zeroed(&self, l: Layout) -> *mut u8 {
-        // SAFETY: the caller's contract, passed on.
-        let p = unsafe { System.alloc_zeroed(l) };
-        if !p.is_null() {
-            Counting::add(l.size() as isize);
-        }
-        p
-    }
-
-    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
-        Counting::add(-(l.size() as isize));
-        // SAFETY: the caller's contract, passed on.
-        unsafe { System.dealloc(p, l) }
-    }
-
-    unsafe fn realloc(&self, p: *mut u8, l: Layout, new_size: usize) -> *mut u8 {
-        // SAFETY: the caller's contract, passed on.
-        let q = unsafe { System.realloc(p, l, new_size) };
-        if !q.is_null() {
-            Counting::add(new_size as isize - l.size() as isize);
-        }
-        q
-    }
-}
-
 #[global_allocator]
-static ALLOCATOR: Counting = Counting;
-
-/// The most bytes live at once while `f` ran, over those live when it started, and what it
-/// returned.
-fn peak_bytes<T>(f: impl FnOnce() -> T) -> (T, usize) {
-    LIVE.store(0, Relaxed);
-    PEAK.store(0, Relaxed);
-    COUNTING.store(true, Relaxed);
-    let out = f();
-    COUNTING.store(false, Relaxed);
-    (out, PEAK.load(Relaxed).max(0) as usize)
-}
+static ALLOCATOR: CountingAlloc = CountingAlloc;
 
 /// The process's CPU time so far (every thread's, from `/proc/self/task/*/schedstat`), in
 /// seconds: on a shared machine, what a one-thread build costs regardless of waiting.

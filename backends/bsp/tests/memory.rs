@@ -4,21 +4,14 @@
 //! keeps within 2x on a mesh and on a scene of many tiny objects; the exact build (its event
 //! lists per node) is only reported.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicBool, AtomicIsize, Ordering::Relaxed};
 use std::sync::{Mutex, MutexGuard};
 
+use coherent_accel::alloc_count::{CountingAlloc, peak_bytes};
 use coherent_accel::shapes::soup;
 use coherent_accel::{Accel, Instance, Mesh, Scene};
 use coherent_bsp::{Bsp, BspParams, BuildPreset};
 use glam::{Affine3A, Vec3};
 
-/// Whether [`Counting`] counts (only inside [`peak_bytes`]).
-static COUNTING: AtomicBool = AtomicBool::new(false);
-/// Bytes allocated less bytes freed since counting started.
-static LIVE: AtomicIsize = AtomicIsize::new(0);
-/// The most [`LIVE`] has been since counting started.
-static PEAK: AtomicIsize = AtomicIsize::new(0);
 /// One test at a time: the harness runs tests on several threads, and every thread's
 /// allocations count, so each test holds this from its start (scene included) to its end.
 static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
@@ -27,57 +20,8 @@ fn serial() -> MutexGuard<'static, ()> {
     ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner())
 }
 
-/// The system allocator, counting the bytes live while [`COUNTING`] is on.
-struct Counting;
-
-impl Counting {
-    fn add(delta: isize) {
-        if COUNTING.load(Relaxed) {
-            let now = LIVE.fetch_add(delta, Relaxed) + delta;
-            PEAK.fetch_max(now, Relaxed);
-        }
-    }
-}
-
-// SAFETY: every call is forwarded to the system allocator unchanged; the counters only
-// observe.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
-        // SAFETY: the caller's contract, passed on.
-        let p = unsafe { System.alloc(l) };
-        if !p.is_null() {
-            Counting::add(l.size() as isize);
-        }
-        p
-    }
-
-    unsafe fn alloc_zeroed(&self, l: Layout) -> *mut u8 {
-        // SAFETY: the caller's contract, passed on.
-        let p = unsafe { System.alloc_zeroed(l) };
-        if !p.is_null() {
-            Counting::add(l.size() as isize);
-        }
-        p
-    }
-
-    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
-        Counting::add(-(l.size() as isize));
-        // SAFETY: the caller's contract, passed on.
-        unsafe { System.dealloc(p, l) }
-    }
-
-    unsafe fn realloc(&self, p: *mut u8, l: Layout, new_size: usize) -> *mut u8 {
-        // SAFETY: the caller's contract, passed on.
-        let q = unsafe { System.realloc(p, l, new_size) };
-        if !q.is_null() {
-            Counting::add(new_size as isize - l.size() as isize);
-        }
-        q
-    }
-}
-
 #[global_allocator]
-static ALLOCATOR: Counting = Counting;
+static ALLOCATOR: CountingAlloc = CountingAlloc;
 
 /// `scene` built with `preset` on `threads` threads: the structure, and the most bytes live
 /// at once during the build over those live before it (the finished structure included).
@@ -89,12 +33,8 @@ fn build_counted(scene: &Scene, preset: BuildPreset, threads: usize) -> (Bsp, us
         .num_threads(threads)
         .build()
         .unwrap();
-    LIVE.store(0, Relaxed);
-    PEAK.store(0, Relaxed);
-    COUNTING.store(true, Relaxed);
-    let bsp = pool.install(|| Bsp::build(scene, &p));
-    COUNTING.store(false, Relaxed);
-    (bsp.unwrap(), PEAK.load(Relaxed).max(0) as usize)
+    let (bsp, peak) = peak_bytes(|| pool.install(|| Bsp::build(scene, &p)));
+    (bsp.unwrap(), peak)
 }
 
 /// A mesh of 30,000 random small triangles (large enough to bin and partition across threads
