@@ -118,10 +118,11 @@ struct RenderArgs {
     backend: Option<String>,
     #[arg(long, default_value = "bsp", help = accel_help())]
     accel: String,
-    /// How the BSP builds its object trees: `exact` (the O(N log N) sweep over every plane at
-    /// every node) or `fast` (binned SAH above 256 references, the sweep below; subtrees in
-    /// parallel). Other accelerators ignore it.
-    #[arg(long, default_value = "exact", value_parser = parse_bsp_build())]
+    /// How the BSP builds its object trees: `binned` (binned SAH at every level, in
+    /// parallel: the shortest time to a first image), `exact` (the O(N log N) sweep over every
+    /// plane at every node: the fastest trees, for a longer build) or `fast` (binned SAH above
+    /// 256 references, the sweep below). Other accelerators ignore it.
+    #[arg(long, default_value_t = coherent::bsp::BuildPreset::default(), value_parser = parse_bsp_build())]
     bsp_build: coherent::bsp::BuildPreset,
     /// Worker threads (default: every core).
     #[arg(long)]

@@ -64,21 +64,24 @@ pub const MAX_BINS: u32 = 64;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum BuildPreset {
     /// The O(N log N) sweep over sorted events at every node (Wald & Havran 2006): every
-    /// candidate plane, every node.
-    #[default]
+    /// candidate plane, every node. The best trees: 10-20 % faster frames than `binned`'s on
+    /// two of the paper's four scenes, for a build up to twice as long.
     Exact,
     /// Binned SAH at nodes above [`SahParams::sweep_below`] references (Hunt et al. 2006;
     /// Shevtsov, Soupikov & Kapustin 2007), the exact sweep below; subtrees of large nodes
     /// built in parallel. The same tree on any number of threads.
     ///
-    /// Not the default: it builds faster for trees a little costlier to traverse, and no
-    /// frame-level measurement has shown it ahead yet (docs/findings/traversal.md).
+    /// Not the default: `binned` builds faster still for trees as good.
     Fast,
     /// Binned SAH at every node of more than [`SahParams::flat_sweep_below`] references, a
     /// sweep over the few sorted box bounds below, on flat reference arrays partitioned in
     /// place; straddling triangles clipped by the chosen plane only; large nodes binned and
     /// partitioned across threads, subtrees built as tasks (Shevtsov, Soupikov & Kapustin
     /// 2007). The same tree on any number of threads.
+    ///
+    /// The default: the shortest time to a first image (build plus one frame) summed over
+    /// the paper's scenes, and on 7 of the 11 scenes of Table 3's run (docs/findings/builds.md).
+    #[default]
     Binned,
 }
 
