@@ -1,8 +1,14 @@
 //! Build script of `coherent`: records how this binary was built (compiler version, RUSTFLAGS,
-//! profile) for `machine.json` and `coherent info` (the results files of docs/experiments.md).
+//! profile) for `machine.json` and `coherent info` (the results files of docs/experiments.md),
+//! and optimises the RGB-to-spectrum table of `spectrum::upsample`
+//! (build/rgb_to_spectrum.rs).
 
 use std::env;
+use std::path::PathBuf;
 use std::process::Command;
+
+#[path = "build/rgb_to_spectrum.rs"]
+mod rgb_to_spectrum;
 
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
@@ -31,4 +37,7 @@ fn main() {
     // `debug` or `release` (the profile's base: `bench` builds report `release`).
     let profile = env::var("PROFILE").unwrap_or_else(|_| "unknown".to_owned());
     println!("cargo:rustc-env=COHERENT_PROFILE={profile}");
+
+    let out_dir = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
+    rgb_to_spectrum::write_table(&out_dir);
 }

@@ -28,6 +28,7 @@ pub mod render;
 pub mod require;
 pub mod sampler;
 pub mod scene;
+pub mod spectrum;
 pub mod tabulated;
 pub mod texture;
 pub mod tonemap;
