@@ -31,12 +31,19 @@
 //! scale = [1, 1, 1]
 //! keyframes = [{ time = 1.0, translate = [0, 1, 0] }]   # optional motion
 //!
+//! [materials.prism]
+//! type = "glass"
+//! glass = "F2"                    # or: ior = 1.5 | cauchy = [A, B, C] (um)
+//!                                 # | sellmeier = { b = [..], c = [..] } (um^2)
+//!
 //! [[lights]]
 //! type = "omni"                   # omni | spot | parallel | direct | linear | circular |
 //!                                 # rectangular | goniodiagram (file = "lamp.ies" or ".ldt")
 //!                                 # | environment (file = "sky.exr")
 //! position = [0, 3, 0]
 //! intensity = [10, 10, 10]
+//! spectrum = "A"                  # optional: a CIE illuminant (D65, A, F1-F12, ...),
+//!                                 # or: temperature = 2856 (a blackbody, kelvin)
 //!
 //! [assets]                        # optional: files under `.cache/` come from the set-up
 //! fetch = "assimp hdr"            # the `scripts/native.py` steps that fetch them
@@ -57,6 +64,9 @@ use toml::Spanned;
 use super::{Camera, InstanceMotion, Keyframe, RenderScene, SceneError, ShadedMesh};
 use crate::light::{self, Light, SpotFalloff};
 use crate::material::Material;
+use crate::spectrum::blackbody::Blackbody;
+use crate::spectrum::dispersion::{self, Dispersion};
+use crate::spectrum::illuminant::{Emission, Illuminant};
 use crate::texture::{InverseToneMap, Wrap};
 use crate::tonemap::Operator;
 
@@ -135,9 +145,15 @@ enum MaterialSpec {
         #[serde(default)]
         diffuse: V3,
     },
+    /// Glass of a constant index (`ior`, 1.5 by default) or of a dispersive one: a named glass
+    /// (`glass = "BK7"`), Cauchy's coefficients or Sellmeier's (one of the four). An RGB
+    /// render uses the dispersive index at the helium d line (587.56 nm).
     Glass {
-        #[serde(default = "default_ior")]
-        ior: f32,
+        ior: Option<f32>,
+        glass: Option<String>,
+        /// A, B (um^2) and optionally C (um^4).
+        cauchy: Option<Vec<f32>>,
+        sellmeier: Option<SellmeierSpec>,
         #[serde(default = "ones")]
         tint: V3,
     },
@@ -160,8 +176,45 @@ enum MaterialSpec {
     },
 }
 
-fn default_ior() -> f32 {
-    1.5
+/// Sellmeier's coefficients: `n^2 = 1 + sum b_i l^2 / (l^2 - c_i)`, `l` in um, `c_i` in um^2.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SellmeierSpec {
+    b: V3,
+    c: V3,
+}
+
+/// A glass's index of refraction from whichever of its four settings it gives.
+fn glass_index(
+    ior: Option<f32>,
+    glass: &Option<String>,
+    cauchy: &Option<Vec<f32>>,
+    sellmeier: &Option<SellmeierSpec>,
+) -> Result<Dispersion, String> {
+    let given = [
+        ior.is_some(),
+        glass.is_some(),
+        cauchy.is_some(),
+        sellmeier.is_some(),
+    ];
+    if given.iter().filter(|&&g| g).count() > 1 {
+        return Err("give one of `ior`, `glass`, `cauchy` and `sellmeier`".to_string());
+    }
+    let d = if let Some(name) = glass {
+        dispersion::preset(name).map_err(|e| format!("glass: {e}"))?
+    } else if let Some(k) = cauchy {
+        match *k.as_slice() {
+            [a, b] => Dispersion::Cauchy { a, b, c: 0.0 },
+            [a, b, c] => Dispersion::Cauchy { a, b, c },
+            _ => return Err("cauchy: expected [A, B] or [A, B, C]".to_string()),
+        }
+    } else if let Some(s) = sellmeier {
+        Dispersion::Sellmeier { b: s.b, c: s.c }
+    } else {
+        Dispersion::Constant(ior.unwrap_or(1.5))
+    };
+    d.validate().map_err(|e| e.to_string())?;
+    Ok(d)
 }
 
 #[derive(Debug, Deserialize)]
@@ -197,12 +250,17 @@ struct KeyframeSpec {
     scale: Option<V3>,
 }
 
+/// A light. Every kind but the environment map may name its emission spectrum: `spectrum`, a
+/// CIE illuminant ("D65", "A", "F2", ...), or `temperature`, a blackbody's in kelvin (see
+/// [`emission`]).
 #[derive(Debug, Deserialize)]
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 enum LightSpec {
     Omni {
         position: V3,
         intensity: V3,
+        spectrum: Option<String>,
+        temperature: Option<f32>,
     },
     Spot {
         position: V3,
@@ -212,15 +270,21 @@ enum LightSpec {
         outer_deg: f32,
         #[serde(default)]
         exact: bool,
+        spectrum: Option<String>,
+        temperature: Option<f32>,
     },
     Parallel {
         direction: V3,
         irradiance: V3,
+        spectrum: Option<String>,
+        temperature: Option<f32>,
     },
     Direct {
         position: V3,
         axis: V3,
         intensity: V3,
+        spectrum: Option<String>,
+        temperature: Option<f32>,
     },
     Linear {
         a: V3,
@@ -228,6 +292,8 @@ enum LightSpec {
         intensity: V3,
         #[serde(default = "linear_points")]
         points: u32,
+        spectrum: Option<String>,
+        temperature: Option<f32>,
     },
     Circular {
         center: V3,
@@ -236,6 +302,8 @@ enum LightSpec {
         radiance: V3,
         #[serde(default = "circular_grid")]
         grid: [u32; 2],
+        spectrum: Option<String>,
+        temperature: Option<f32>,
     },
     Rectangular {
         corner: V3,
@@ -244,6 +312,8 @@ enum LightSpec {
         radiance: V3,
         #[serde(default = "rectangular_grid")]
         grid: [u32; 2],
+        spectrum: Option<String>,
+        temperature: Option<f32>,
     },
     Goniodiagram {
         file: String,
@@ -256,6 +326,8 @@ enum LightSpec {
         colour: V3,
         #[serde(default)]
         uniform: bool,
+        spectrum: Option<String>,
+        temperature: Option<f32>,
     },
     Environment {
         file: String,
@@ -614,7 +686,10 @@ fn lights(
     for (k, l) in spec.lights.iter().enumerate() {
         // A setting out of range is the scene file's error, not its file's (even when the
         // light's file was fetched by the set-up).
-        let light = make_light(src, l.get_ref(), k as u64).map_err(|e| match l.get_ref() {
+        let tint = emission(l.get_ref())
+            .map_err(|e| src.at(l.span(), &format!("lights[{k}]"), e))?
+            .map_or([1.0; 3], |e| e.table().rgb());
+        let light = make_light(src, l.get_ref(), k as u64, tint).map_err(|e| match l.get_ref() {
             LightSpec::Goniodiagram { file, .. } | LightSpec::Environment { file, .. }
                 if !matches!(e, light::LightError::BadParameter { .. }) =>
             {
@@ -625,6 +700,68 @@ fn lights(
         lights.push(light);
     }
     Ok(lights)
+}
+
+/// A light's emission spectrum, if it names one. In an RGB render the light's colour becomes
+/// the spectrum's linear sRGB at a luminance of 1 times its RGB intensity: a grey intensity
+/// keeps its luminance and takes the spectrum's colour, a coloured one filters it.
+fn emission(l: &LightSpec) -> Result<Option<Emission>, String> {
+    let (spectrum, temperature) = match l {
+        LightSpec::Omni {
+            spectrum,
+            temperature,
+            ..
+        }
+        | LightSpec::Spot {
+            spectrum,
+            temperature,
+            ..
+        }
+        | LightSpec::Parallel {
+            spectrum,
+            temperature,
+            ..
+        }
+        | LightSpec::Direct {
+            spectrum,
+            temperature,
+            ..
+        }
+        | LightSpec::Linear {
+            spectrum,
+            temperature,
+            ..
+        }
+        | LightSpec::Circular {
+            spectrum,
+            temperature,
+            ..
+        }
+        | LightSpec::Rectangular {
+            spectrum,
+            temperature,
+            ..
+        }
+        | LightSpec::Goniodiagram {
+            spectrum,
+            temperature,
+            ..
+        } => (spectrum, temperature),
+        LightSpec::Environment { .. } => return Ok(None),
+    };
+    let e = match (spectrum, temperature) {
+        (None, None) => return Ok(None),
+        (Some(_), Some(_)) => {
+            return Err("give `spectrum` or `temperature`, not both".to_string());
+        }
+        (Some(name), None) => {
+            Emission::Illuminant(Illuminant::parse(name).map_err(|e| format!("spectrum: {e}"))?)
+        }
+        (None, Some(k)) => {
+            Emission::Blackbody(Blackbody::new(*k).map_err(|e| format!("temperature: {e}"))?)
+        }
+    };
+    Ok(Some(e))
 }
 
 /// The scene's objects as they are placed: each mesh (file or shape, with its material)
@@ -905,11 +1042,19 @@ fn material(src: &Source, name: &str, m: &Spanned<MaterialSpec>) -> Result<Mater
             out.optics.reflectance = *reflectance;
             out
         }
-        MaterialSpec::Glass { ior, tint } => {
+        MaterialSpec::Glass {
+            ior,
+            glass,
+            cauchy,
+            sellmeier,
+            tint,
+        } => {
+            let index = glass_index(*ior, glass, cauchy, sellmeier)
+                .map_err(|e| src.at(m.span(), &field, e))?;
             let mut out = Material::phong(name, [0.0; 3], [0.0; 3], 0.0);
             out.optics.reflectance = [1.0; 3];
             out.optics.transmittance = *tint;
-            out.optics.ior = *ior;
+            out.optics.ior = index.index_d();
             out.optics.fresnel = true;
             out
         }
@@ -943,8 +1088,14 @@ fn material(src: &Source, name: &str, m: &Spanned<MaterialSpec>) -> Result<Mater
     })
 }
 
-fn make_light(src: &Source, l: &LightSpec, seed: u64) -> Result<Light, light::LightError> {
+fn make_light(
+    src: &Source,
+    l: &LightSpec,
+    seed: u64,
+    tint: V3,
+) -> Result<Light, light::LightError> {
     let v = Vec3::from;
+    let c = |x: V3| [x[0] * tint[0], x[1] * tint[1], x[2] * tint[2]];
     Ok(match *l {
         LightSpec::Goniodiagram {
             ref file,
@@ -953,12 +1104,13 @@ fn make_light(src: &Source, l: &LightSpec, seed: u64) -> Result<Light, light::Li
             x,
             colour,
             uniform,
+            ..
         } => Light::Goniodiagram(light::Goniodiagram::load(
             &src.resolve(file),
             v(position),
             v(up),
             v(x),
-            colour,
+            c(colour),
             if uniform {
                 light::GonioLookup::Uniform
             } else {
@@ -981,7 +1133,8 @@ fn make_light(src: &Source, l: &LightSpec, seed: u64) -> Result<Light, light::Li
         LightSpec::Omni {
             position,
             intensity,
-        } => Light::Omni(light::Omni::new(v(position), intensity)?),
+            ..
+        } => Light::Omni(light::Omni::new(v(position), c(intensity))?),
         LightSpec::Spot {
             position,
             axis,
@@ -989,6 +1142,7 @@ fn make_light(src: &Source, l: &LightSpec, seed: u64) -> Result<Light, light::Li
             inner_deg,
             outer_deg,
             exact,
+            ..
         } => {
             // Checked in the file's degrees (the light checks its radians again).
             if !(outer_deg.is_finite() && outer_deg > 0.0 && outer_deg <= 180.0) {
@@ -1010,7 +1164,7 @@ fn make_light(src: &Source, l: &LightSpec, seed: u64) -> Result<Light, light::Li
             Light::Spot(light::Spot::new(
                 v(position),
                 v(axis),
-                intensity,
+                c(intensity),
                 inner_deg.to_radians(),
                 outer_deg.to_radians(),
                 if exact {
@@ -1023,21 +1177,24 @@ fn make_light(src: &Source, l: &LightSpec, seed: u64) -> Result<Light, light::Li
         LightSpec::Parallel {
             direction,
             irradiance,
-        } => Light::Parallel(light::Parallel::new(v(direction), irradiance)?),
+            ..
+        } => Light::Parallel(light::Parallel::new(v(direction), c(irradiance))?),
         LightSpec::Direct {
             position,
             axis,
             intensity,
-        } => Light::Direct(light::Direct::new(v(position), v(axis), intensity)?),
+            ..
+        } => Light::Direct(light::Direct::new(v(position), v(axis), c(intensity))?),
         LightSpec::Linear {
             a,
             b,
             intensity,
             points,
+            ..
         } => Light::Linear(light::Linear::new(
             v(a),
             v(b),
-            intensity,
+            c(intensity),
             points,
             seed,
             false,
@@ -1048,11 +1205,12 @@ fn make_light(src: &Source, l: &LightSpec, seed: u64) -> Result<Light, light::Li
             radius,
             radiance,
             grid,
+            ..
         } => Light::Circular(light::Circular::new(
             v(center),
             v(normal),
             radius,
-            radiance,
+            c(radiance),
             (grid[0], grid[1]),
             seed,
             false,
@@ -1063,11 +1221,12 @@ fn make_light(src: &Source, l: &LightSpec, seed: u64) -> Result<Light, light::Li
             edge_v,
             radiance,
             grid,
+            ..
         } => Light::Rectangular(light::Rectangular::new(
             v(corner),
             v(edge_u),
             v(edge_v),
-            radiance,
+            c(radiance),
             (grid[0], grid[1]),
             seed,
             false,

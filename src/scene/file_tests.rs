@@ -365,3 +365,103 @@ fn a_missing_or_corrupt_asset_names_it_and_how_to_fetch_it() {
         "{e}"
     );
 }
+
+/// The first light's RGB intensity, when it is an omni light.
+fn omni_intensity(text: &str) -> [f32; 3] {
+    match &parse(&path(), text).unwrap().lights[0] {
+        crate::light::Light::Omni(o) => o.intensity(),
+        other => panic!("expected an omni light, got {:?}", other.kind()),
+    }
+}
+
+#[test]
+fn a_light_spectrum_colours_its_intensity_at_the_same_luminance() {
+    let named = |extra: &str| {
+        GOOD.replace(
+            "intensity = [10, 10, 10]",
+            &format!("intensity = [10, 10, 10]\n{extra}"),
+        )
+    };
+    let plain = omni_intensity(GOOD);
+    // D65 is the display's white: the intensity stays as it was.
+    let d65 = omni_intensity(&named("spectrum = \"d65\""));
+    for (a, b) in d65.iter().zip(plain) {
+        assert!((a - b).abs() <= 1e-2 * b, "{d65:?} against {plain:?}");
+    }
+    // Illuminant A and a 2856 K blackbody (its definition) are warm, at the same luminance.
+    let luminance = |c: [f32; 3]| crate::spectrum::cie::luminance_rgb(c);
+    for extra in ["spectrum = \"A\"", "temperature = 2856.0"] {
+        let a = omni_intensity(&named(extra));
+        assert!(a[0] > a[1] && a[1] > a[2], "{extra}: {a:?}");
+        let (y, y0) = (luminance(a), luminance(plain));
+        assert!((y - y0).abs() <= 1e-2 * y0, "{extra}: Y {y} against {y0}");
+    }
+}
+
+#[test]
+fn bad_spectra_and_glasses_are_named() {
+    let light = |extra: &str| {
+        GOOD.replace(
+            "intensity = [10, 10, 10]",
+            &format!("intensity = [10, 10, 10]\n{extra}"),
+        )
+    };
+    for (extra, words) in [
+        ("spectrum = \"D99\"", &["lights[0]", "D99", "D65"][..]),
+        ("temperature = 0.0", &["lights[0]", "temperature"]),
+        ("temperature = -5.0", &["lights[0]", "temperature"]),
+        ("temperature = 100001.0", &["lights[0]", "temperature"]),
+        ("temperature = nan", &["lights[0]", "temperature"]),
+        (
+            "spectrum = \"A\"\ntemperature = 3000.0",
+            &["lights[0]", "not both"],
+        ),
+    ] {
+        let (msg, _) = error(&light(extra));
+        for w in words {
+            assert!(msg.contains(w), "{extra}: {msg}");
+        }
+        assert!(msg.contains("test.toml:"), "{extra}: {msg}");
+    }
+    let glass = |setting: &str| GOOD.replace("ior = 1.45", setting);
+    for (setting, words) in [
+        ("glass = \"unobtainium\"", &["materials.glass", "unobtainium", "BK7"][..]),
+        ("cauchy = [1.5, -0.004]", &["materials.glass", "-0.004"]),
+        ("cauchy = [1.5]", &["materials.glass", "cauchy"]),
+        ("cauchy = [nan, 0.004]", &["materials.glass", "NaN"]),
+        (
+            "sellmeier = { b = [1.0, 0.2, 1.0], c = [0.006, -0.02, 100.0] }",
+            &["materials.glass", "-0.02"],
+        ),
+        (
+            "sellmeier = { b = [1.0, 0.2, inf], c = [0.006, 0.02, 100.0] }",
+            &["materials.glass", "inf"],
+        ),
+        // A pole of the index inside the visible range (0.25 um^2: 500 nm).
+        (
+            "sellmeier = { b = [1.0, 0.2, 1.0], c = [0.006, 0.25, 100.0] }",
+            &["materials.glass"],
+        ),
+        ("ior = 1.5\nglass = \"BK7\"", &["materials.glass", "one of"]),
+    ] {
+        let (msg, _) = error(&glass(setting));
+        for w in words {
+            assert!(msg.contains(w), "{setting}: {msg}");
+        }
+    }
+}
+
+#[test]
+fn a_dispersive_glass_renders_rgb_at_its_d_line_index() {
+    let ior = |setting: &str| {
+        let s = parse(&path(), &GOOD.replace("ior = 1.45", setting)).unwrap();
+        s.materials.iter().find(|m| m.name == "glass").unwrap().optics.ior
+    };
+    assert_eq!(ior("ior = 1.45"), 1.45);
+    assert!((ior("glass = \"BK7\"") - 1.5168).abs() < 1e-4);
+    assert!((ior("glass = \"f2\"") - 1.6200).abs() < 1e-4);
+    assert!((ior("cauchy = [1.5, 0.0042]") - (1.5 + 0.0042 / 0.58756f32.powi(2))).abs() < 1e-5);
+    let bk7 = "sellmeier = { b = [1.03961212, 0.231792344, 1.01046945], \
+               c = [0.00600069867, 0.0200179144, 103.560653] }";
+    assert!((ior(bk7) - ior("glass = \"BK7\"")).abs() < 1e-6);
+}
