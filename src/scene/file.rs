@@ -689,14 +689,15 @@ fn lights(
         let tint = emission(l.get_ref())
             .map_err(|e| src.at(l.span(), &format!("lights[{k}]"), e))?
             .map_or([1.0; 3], |e| e.table().rgb());
-        let light = make_light(src, l.get_ref(), k as u64, tint).map_err(|e| match l.get_ref() {
-            LightSpec::Goniodiagram { file, .. } | LightSpec::Environment { file, .. }
-                if !matches!(e, light::LightError::BadParameter { .. }) =>
-            {
-                src.file_err(l.span(), &format!("lights[{k}].file"), file, e, None)
-            }
-            _ => src.at(l.span(), &format!("lights[{k}]"), e),
-        })?;
+        let light =
+            make_light(src, l.get_ref(), k as u64, tint).map_err(|e| match l.get_ref() {
+                LightSpec::Goniodiagram { file, .. } | LightSpec::Environment { file, .. }
+                    if !matches!(e, light::LightError::BadParameter { .. }) =>
+                {
+                    src.file_err(l.span(), &format!("lights[{k}].file"), file, e, None)
+                }
+                _ => src.at(l.span(), &format!("lights[{k}]"), e),
+            })?;
         lights.push(light);
     }
     Ok(lights)

@@ -425,7 +425,10 @@ fn bad_spectra_and_glasses_are_named() {
     }
     let glass = |setting: &str| GOOD.replace("ior = 1.45", setting);
     for (setting, words) in [
-        ("glass = \"unobtainium\"", &["materials.glass", "unobtainium", "BK7"][..]),
+        (
+            "glass = \"unobtainium\"",
+            &["materials.glass", "unobtainium", "BK7"][..],
+        ),
         ("cauchy = [1.5, -0.004]", &["materials.glass", "-0.004"]),
         ("cauchy = [1.5]", &["materials.glass", "cauchy"]),
         ("cauchy = [nan, 0.004]", &["materials.glass", "NaN"]),
@@ -455,7 +458,12 @@ fn bad_spectra_and_glasses_are_named() {
 fn a_dispersive_glass_renders_rgb_at_its_d_line_index() {
     let ior = |setting: &str| {
         let s = parse(&path(), &GOOD.replace("ior = 1.45", setting)).unwrap();
-        s.materials.iter().find(|m| m.name == "glass").unwrap().optics.ior
+        s.materials
+            .iter()
+            .find(|m| m.name == "glass")
+            .unwrap()
+            .optics
+            .ior
     };
     assert_eq!(ior("ior = 1.45"), 1.45);
     assert!((ior("glass = \"BK7\"") - 1.5168).abs() < 1e-4);
