@@ -163,6 +163,20 @@ pub fn emitter(rgb: [f32; 3]) -> Emitter {
     }
 }
 
+/// The RGB a reflectance gives back once upsampled, lit by the display's white and seen by
+/// the CIE 1931 observer, and the CIELAB Delta E between the two (relative to that white):
+/// the model's error for `rgb` (`examples/upsample_error.rs` maps it over the sRGB cube).
+pub fn round_trip(rgb: [f32; 3]) -> (f64, [f32; 3]) {
+    use crate::spectrum::{cie, illuminant};
+    let s = reflectance(rgb);
+    let white = illuminant::white();
+    let xyz = cie::xyz_of(|l| f64::from(s.eval(l)) * f64::from(white.eval(l)));
+    let back = cie::xyz_to_rgb(xyz.map(|v| v as f32));
+    let ref_white = cie::rgb_to_xyz([1.0; 3]).map(f64::from);
+    let lab = |rgb: [f32; 3]| cie::lab(cie::rgb_to_xyz(rgb).map(f64::from), ref_white);
+    (cie::delta_e(lab(rgb), lab(back)), back)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -295,19 +309,6 @@ mod tests {
     /// The largest colour difference of `rgb` from its reflectance lit by the display's
     /// white, integrated by the CIE 1931 observer and taken back to linear sRGB (both in
     /// CIELAB relative to sRGB's white).
-    fn round_trip_delta_e(rgb: [f32; 3]) -> (f64, [f32; 3]) {
-        use crate::spectrum::{cie, illuminant};
-        let s = reflectance(rgb);
-        let white = illuminant::white();
-        let xyz = cie::xyz_of(|l| f64::from(s.eval(l)) * f64::from(white.eval(l)));
-        let back = cie::xyz_to_rgb(xyz.map(|v| v as f32));
-        let lab = |rgb: [f32; 3]| {
-            let ref_white = cie::rgb_to_xyz([1.0; 3]).map(f64::from);
-            cie::lab(cie::rgb_to_xyz(rgb).map(f64::from), ref_white)
-        };
-        (cie::delta_e(lab(rgb), lab(back)), back)
-    }
-
     #[test]
     fn reflectances_round_trip_within_a_just_noticeable_difference() {
         let mut rng = StdRng::seed_from_u64(3);
@@ -315,7 +316,7 @@ mod tests {
         let random = (0..500).map(|_| [rng.random(), rng.random(), rng.random()]);
         let mut worst = (0.0, [0.0; 3], [0.0; 3]);
         for rgb in grid.chain(random) {
-            let (de, back) = round_trip_delta_e(rgb);
+            let (de, back) = round_trip(rgb);
             assert!(de < 1.0, "{rgb:?} came back as {back:?}: Delta E {de}");
             if de > worst.0 {
                 worst = (de, rgb, back);
