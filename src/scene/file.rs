@@ -211,7 +211,9 @@ fn glass_index(
     } else if let Some(s) = sellmeier {
         Dispersion::Sellmeier { b: s.b, c: s.c }
     } else {
-        Dispersion::Constant(ior.unwrap_or(1.5))
+        // The material's own check applies (finite and positive: a relative index, such as
+        // an air bubble's in water, may be below 1).
+        return Ok(Dispersion::Constant(ior.unwrap_or(1.5)));
     };
     d.validate().map_err(|e| e.to_string())?;
     Ok(d)

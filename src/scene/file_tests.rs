@@ -466,6 +466,8 @@ fn a_dispersive_glass_renders_rgb_at_its_d_line_index() {
             .ior
     };
     assert_eq!(ior("ior = 1.45"), 1.45);
+    // A relative index below 1 (a bubble in water) stays allowed.
+    assert_eq!(ior("ior = 0.75"), 0.75);
     assert!((ior("glass = \"BK7\"") - 1.5168).abs() < 1e-4);
     assert!((ior("glass = \"f2\"") - 1.6200).abs() < 1e-4);
     assert!((ior("cauchy = [1.5, 0.0042]") - (1.5 + 0.0042 / 0.58756f32.powi(2))).abs() < 1e-5);
