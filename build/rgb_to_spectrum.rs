@@ -15,10 +15,10 @@ use std::time::Instant;
 
 use rgb2spec::optimize::gamut::Gamut;
 
-/// Entries per axis of the table. pbrt-v4 uses 64; 48 optimises in about half the time
-/// (the optimisation runs on one thread, once per profile), and its round-trip errors are what
-/// `examples/upsample_error.rs` prints (a mean Delta E below 0.1). The table holds
-/// `3 * RESOLUTION^3` coefficient triples (3.8 MiB).
+/// Entries per axis of the table. pbrt-v4 uses 64; fewer entries optimise faster (one
+/// thread, once per profile), and the round-trip error at this resolution is what
+/// `examples/upsample_error.rs` prints (docs/architecture.md, "Spectral colour"). The table
+/// holds `3 * RESOLUTION^3` coefficient triples.
 pub const RESOLUTION: usize = 48;
 
 /// The table's file name in `$OUT_DIR`.

@@ -64,8 +64,8 @@ pub const MAX_BINS: u32 = 64;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum BuildPreset {
     /// The O(N log N) sweep over sorted events at every node (Wald & Havran 2006): every
-    /// candidate plane, every node. The best trees: 10-20 % faster frames than `binned`'s on
-    /// two of the paper's four scenes, for a build up to twice as long.
+    /// candidate plane, every node. The best trees, for a longer build
+    /// (docs/findings/builds.md).
     Exact,
     /// Binned SAH at nodes above [`SahParams::sweep_below`] references (Hunt et al. 2006;
     /// Shevtsov, Soupikov & Kapustin 2007), the exact sweep below; subtrees of large nodes
@@ -80,7 +80,7 @@ pub enum BuildPreset {
     /// 2007). The same tree on any number of threads.
     ///
     /// The default: the shortest time to a first image (build plus one frame) summed over
-    /// the paper's scenes, and on 7 of the 11 scenes of Table 3's run (docs/findings/builds.md).
+    /// the paper's scenes (docs/findings/builds.md).
     #[default]
     Binned,
 }
