@@ -10,6 +10,9 @@ pub trait SampleTracer: Sync {
     /// Per-task statistics (rays by kind, active lanes per stage, NaN count...), merged in a
     /// fixed order.
     type Stats: Default + Send;
+    /// The backends the tracer is compiled for ([`coherent_simd::Kernel::BACKENDS`]): on
+    /// any other the film says it cannot run it.
+    const BACKENDS: u32 = coherent_simd::Backend::WITH_FACTORS;
     fn merge_stats(into: &mut Self::Stats, from: Self::Stats);
     /// Radiance arriving through the image plane at continuous pixel coordinates `(xs, ys)`
     /// (pixel `(i, j)` covers `[i, i+1) x [j, j+1)`, y down) for the active lanes (inactive
