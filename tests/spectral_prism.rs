@@ -77,9 +77,14 @@ fn centroid(img: &[[f32; 3]], what: &str) -> f64 {
     let (right, xr) = mean(peak + HALF_WINDOW + 1..peak + HALF_WINDOW + 1 + FLANK);
     let background = |x: f64| left + (right - left) * (x - xl) / (xr - xl);
     let (mut sum, mut moment) = (0.0, 0.0);
-    for x in peak - HALF_WINDOW..=peak + HALF_WINDOW {
+    for (x, p) in profile
+        .iter()
+        .enumerate()
+        .take(peak + HALF_WINDOW + 1)
+        .skip(peak - HALF_WINDOW)
+    {
         let c = x as f64 + 0.5;
-        let v = profile[x] - background(c);
+        let v = p - background(c);
         sum += v;
         moment += v * c;
     }

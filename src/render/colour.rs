@@ -601,6 +601,7 @@ impl<L: Lanes> Spectral<L> {
             None => {
                 // Index loops, not iterator adaptors: those may stay out of line, outside the
                 // backend's `#[target_feature]` function, where every vector operation is a call.
+                #[allow(clippy::needless_range_loop)]
                 for j in 0..HERO {
                     let lambda = w[j];
                     let white = if with_white {
@@ -730,7 +731,7 @@ impl<L: Lanes> Colour<L> for Spectral<L> {
                 }
                 let s = Self::emitted(l, t, w, mask, e);
                 for i in 0..s.v.len() {
-                    self.v[i] = self.v[i] + s.v[i] * a.v[i];
+                    self.v[i] += s.v[i] * a.v[i];
                 }
             },
         )
@@ -804,7 +805,7 @@ impl<L: Lanes> Colour<L> for Spectral<L> {
     #[inline(always)]
     fn add_product(&mut self, a: &Self, b: &Self) {
         for i in 0..self.v.len() {
-            self.v[i] = self.v[i] + a.v[i] * b.v[i];
+            self.v[i] += a.v[i] * b.v[i];
         }
     }
     #[inline(always)]
@@ -826,7 +827,7 @@ impl<L: Lanes> Colour<L> for Spectral<L> {
                     false,
                 );
                 for i in 0..out.v.len() {
-                    out.v[i] = out.v[i] * k.v[i];
+                    out.v[i] *= k.v[i];
                 }
                 out
             },
@@ -839,12 +840,12 @@ impl<L: Lanes> Colour<L> for Spectral<L> {
             for m in 0..L::N {
                 let sm = l.splat(s.lane(m));
                 for r in m * per..(m + 1) * per {
-                    self.v[r] = self.v[r] * sm;
+                    self.v[r] *= sm;
                 }
             }
         } else {
             for i in 0..self.v.len() {
-                self.v[i] = self.v[i] * s;
+                self.v[i] *= s;
             }
         }
     }
@@ -894,7 +895,7 @@ impl<L: Lanes> Colour<L> for Spectral<L> {
                         for (k, out) in xyz.iter_mut().enumerate() {
                             let mut acc = l.splat(0.0);
                             for i in 0..t.n {
-                                acc = acc + self.v[i] * t.weights[k][i];
+                                acc += self.v[i] * t.weights[k][i];
                             }
                             acc.store(out);
                         }
@@ -906,9 +907,8 @@ impl<L: Lanes> Colour<L> for Spectral<L> {
                                 let mut acc = l.splat(0.0);
                                 for c in 0..per {
                                     let at = c * L::N;
-                                    acc = acc
-                                        + self.v[m * per + c]
-                                            * l.load(&t.weights[k][at..at + L::N]);
+                                    acc +=
+                                        self.v[m * per + c] * l.load(&t.weights[k][at..at + L::N]);
                                 }
                                 let mut s = [0.0f32; MAX_LANES];
                                 acc.store(&mut s);
@@ -1005,7 +1005,7 @@ impl<L: Lanes> Colour<L> for Spectral<L> {
                     }
                 }
                 for (x, f) in self.v.iter_mut().zip(factors.iter()) {
-                    *x = *x * l.load(f);
+                    *x *= l.load(f);
                 }
                 *wave = l.load_i32(&waves);
                 l.load(&iors)
