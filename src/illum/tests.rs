@@ -18,13 +18,13 @@ use crate::material::Material;
 use crate::scene::{Camera, RenderScene, ShadedMesh};
 
 /// The backends these tests run on, the only ones their traversal is compiled for: scalar
-/// and whatever [`Backend::widest`] may be (avx512, else wide16; sse or pulp4 in builds
-/// without `wide`).
-const TESTED: u32 = Backend::Scalar.bit()
-    | Backend::Avx512.bit()
-    | Backend::Wide16.bit()
-    | Backend::Sse.bit()
-    | Backend::Pulp4.bit();
+/// and whatever [`Backend::widest`] may be (avx512, avx2 or sse on x86-64; wide16, or pulp4
+/// in builds without `wide`, elsewhere).
+#[cfg(target_arch = "x86_64")]
+const TESTED: u32 =
+    Backend::Scalar.bit() | Backend::Avx512.bit() | Backend::Avx2.bit() | Backend::Sse.bit();
+#[cfg(not(target_arch = "x86_64"))]
+const TESTED: u32 = Backend::Scalar.bit() | Backend::Wide16.bit() | Backend::Pulp4.bit();
 
 /// The widest backend here, if the tests are compiled for it.
 fn widest() -> Option<Backend> {
