@@ -17,7 +17,7 @@ use coherent::film::{
 };
 use coherent::illum::{DEFAULT_CELLS, IllumMap, MapOptions, Mode};
 use coherent::median::median;
-use coherent::render::colour::ColourForm;
+use coherent::render::colour::{ColourForm, spectral_backends, spectral_refusal};
 use coherent::render::indirect::DEFAULT_MAX_BOUNCES;
 use coherent::render::{
     AovBuffer, AovKind, Indirect, IndirectMode, Packets, RayKind, RenderStats, Renderer,
@@ -35,22 +35,16 @@ fn check_args(args: &RenderArgs) -> anyhow::Result<(Backend, AccelKind, ColourFo
     let colour =
         ColourForm::from_flags(args.colour, args.bins, args.layout).map_err(anyhow::Error::msg)?;
     let backend = match (colour.is_spectral(), args.backend.as_deref()) {
-        // The spectral renderer is compiled for the hand-written backends alone.
-        (true, None) => Backend::hand_written()
+        // The spectral renderer is compiled for a few backends alone.
+        (true, None) => spectral_backends()
             .filter(|b| b.is_available())
             .last()
             .unwrap_or(Backend::Scalar),
         (_, name) => super::backend_arg(name)?,
     };
     if colour.is_spectral() {
-        if !Backend::hand_written().any(|b| b == backend) {
-            let names: Vec<&str> = Backend::hand_written().map(|b| b.name()).collect();
-            bail!(
-                "--backend {}: spectral colour ({}) renders on the hand-written backends, one per width: {}",
-                backend.name(),
-                colour.label(),
-                names.join(", ")
-            );
+        if let Some(why) = spectral_refusal(&colour, backend) {
+            bail!("--backend {}: {why}", backend.name());
         }
         if args.regroup {
             bail!(

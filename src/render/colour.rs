@@ -19,7 +19,7 @@
 //! its hero wavelength, as pbrt-v4 terminates the secondary ones; bins: one bin drawn per
 //! lane), its weight scaled by the number of wavelengths it dropped to stay unbiased.
 
-use coherent_simd::{Lanes, MAX_LANES, Rgbs, SimdF32, SimdI32, SimdMask};
+use coherent_simd::{Backend, Lanes, MAX_LANES, Rgbs, SimdF32, SimdI32, SimdMask};
 use smallvec::SmallVec;
 
 use crate::scene::RenderScene;
@@ -28,6 +28,42 @@ use crate::spectrum::illuminant::{Emission, EmissionTable, white};
 use crate::spectrum::sampling::{Bins, HERO, hero_lanes, hero_xyz};
 use crate::spectrum::upsample::emitter;
 use crate::spectrum::{LAMBDA_MAX, LAMBDA_MIN, SpectrumError, cie};
+
+/// The backends the spectral colour forms are compiled for: scalar, and with the
+/// `spectral-simd` feature every hand-written backend, one per width (sse, avx2, avx512).
+/// Each backend is a second copy of the renderer; all four made the build more than half
+/// again as long, past what the tests' machines afford (docs/architecture.md, "The
+/// renderer's colour forms"), so the SIMD widths are the research build's option:
+/// `scripts/reproduce.sh` turns it on for its full run.
+pub const SPECTRAL_BACKENDS: u32 = if cfg!(feature = "spectral-simd") {
+    Backend::HAND_WRITTEN_BITS
+} else {
+    Backend::Scalar.bit()
+};
+
+/// [`SPECTRAL_BACKENDS`] as backends, narrowest first.
+pub fn spectral_backends() -> impl Iterator<Item = Backend> {
+    Backend::hand_written().filter(|b| SPECTRAL_BACKENDS & b.bit() != 0)
+}
+
+/// Why `backend` cannot render the spectral form `form` in this build, if it cannot.
+pub fn spectral_refusal(form: &ColourForm, backend: Backend) -> Option<String> {
+    if SPECTRAL_BACKENDS & backend.bit() != 0 {
+        return None;
+    }
+    let names: Vec<&str> = spectral_backends().map(|b| b.name()).collect();
+    let hint = if cfg!(feature = "spectral-simd") {
+        ""
+    } else {
+        "; build with `--features spectral-simd` for sse, avx2 and avx512"
+    };
+    Some(format!(
+        "spectral colour ({}) renders on {} in this build, not on {}{hint}",
+        form.label(),
+        names.join(", "),
+        backend.name()
+    ))
+}
 
 /// Where a spectral packet's lanes go when each ray carries N values.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

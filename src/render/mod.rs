@@ -173,8 +173,8 @@ impl<'s, A: Accel> Renderer<'s, A> {
     }
 
     /// Carries colour as `form` from now on: RGB, or a spectral form (hero wavelengths or
-    /// bins), which [`render_frame`] renders on the hand-written backends
-    /// ([`coherent_simd::Backend::hand_written`]).
+    /// bins), which [`render_frame`] renders on the backends of
+    /// [`colour::SPECTRAL_BACKENDS`].
     pub fn set_colour(&mut self, form: ColourForm) -> Result<(), ColourError> {
         self.spectra = Spectra::new(form, self.scene)?;
         self.colour = form;
@@ -710,23 +710,15 @@ pub fn render_frame(
         let e = ColourError::Regroup { form };
         return Err(crate::film::FilmError::Options(e.to_string()));
     }
-    if coherent_simd::Backend::HAND_WRITTEN_BITS & backend.bit() == 0 {
-        let names: Vec<&str> = coherent_simd::Backend::hand_written()
-            .map(|b| b.name())
-            .collect();
-        return Err(crate::film::FilmError::Options(format!(
-            "spectral colour ({form}) renders on the hand-written backends, one per width ({}), not on {}",
-            names.join(", "),
-            backend.name()
-        )));
+    if let Some(why) = colour::spectral_refusal(&renderer.colour, backend) {
+        return Err(crate::film::FilmError::Options(why));
     }
     let frames = SpectralFrames { renderer, spectra };
     crate::film::render(backend, &frames, opts, progress)
 }
 
-/// A renderer in a spectral colour form, as the film sees it: compiled for the hand-written
-/// backends alone (one per width), since a second copy of the renderer on all nine would
-/// nearly double the build.
+/// A renderer in a spectral colour form, as the film sees it: compiled for
+/// [`colour::SPECTRAL_BACKENDS`] alone, since each backend is a second copy of the renderer.
 struct SpectralFrames<'r, 's, A: Accel> {
     renderer: &'r Renderer<'s, A>,
     spectra: &'r Spectra,
@@ -734,7 +726,8 @@ struct SpectralFrames<'r, 's, A: Accel> {
 
 impl<A: Accel> crate::film::SampleTracer for SpectralFrames<'_, '_, A> {
     type Stats = RenderStats;
-    const BACKENDS: u32 = coherent_simd::Backend::HAND_WRITTEN_BITS;
+    const BACKENDS: u32 = colour::SPECTRAL_BACKENDS;
+    const SIGNED: bool = true;
 
     fn merge_stats(into: &mut RenderStats, from: RenderStats) {
         into.merge(from);
