@@ -61,6 +61,11 @@ pub const NAMES: [(&str, &str); 7] = [
     ),
 ];
 
+/// Built-in scenes made to show one effect rather than to be timed (`prism` shows its colours
+/// only in a spectral colour form): the experiments that time every built-in scene leave them
+/// out.
+pub const SHOWCASES: [&str; 1] = ["prism"];
+
 /// A row of the paper's Table 4: scene, triangles, lights, depth.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PaperScene {
