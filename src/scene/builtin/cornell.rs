@@ -141,6 +141,5 @@ pub fn cornell() -> RenderScene {
         accuracy: None,
         background: [0.0; 3],
         motion: Vec::new(),
-        light_spectra: Vec::new(),
     }
 }
