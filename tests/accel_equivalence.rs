@@ -278,10 +278,10 @@ fn check_queries<L: Lanes, A: Accel>(
             rng.next_u64() as u32
         };
         let active = l.mask_from_fn(|i| i < chunk.len() && bits >> i & 1 == 1);
-        let hits = a.intersect(l, &p, active);
-        let occ = a.occluded(l, &p, active);
-        let mut all = vec![vec![]; L::N];
-        a.intersect_all(l, &p, active, &mut |i, h| all[i].push(h));
+        let q = coherent_accel::testing::Apart(a);
+        let hits = q.intersect(l, &p, active);
+        let occ = q.occluded(l, &p, active);
+        let all = q.intersect_all(l, &p, active);
         for (i, got_all) in all.iter().enumerate() {
             let r = p.lane(i);
             if active.lane(i) {

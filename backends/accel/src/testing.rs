@@ -8,7 +8,7 @@ use coherent_simd::{Backend, Kernel, Lanes, Only, SimdMask};
 use glam::{Affine3A, Quat, Vec3};
 
 use crate::shapes::{Rng, soup};
-use crate::{Accel, BruteForce, Hit1, Instance, Ray1, Rays, Scene};
+use crate::{Accel, BruteForce, Hit1, Hits, Instance, Ray1, Rays, Scene};
 
 /// What a test kernel gives: nothing (it asserts) or an error to report.
 pub trait Outcome {
@@ -45,6 +45,77 @@ pub fn on_tested_backends<K: Kernel<Output: Outcome>>(mk: impl Fn() -> K) -> Res
         }
     }
     Ok(())
+}
+
+/// An accelerator's lane queries for tests, each in a function of its own per lane type and
+/// accelerator ([`Lanes::apart`]) that every call in the test crate shares. A test kernel calls
+/// the queries at many places, and inlined (as a packet query and a beam of one packet are in
+/// a kernel) each call is a copy of a whole walk: the BSP's beam test crate compiled for many
+/// minutes. The answers are the same code's, bit for bit.
+pub struct Apart<'a, A>(pub &'a A);
+
+impl<A: Accel> Apart<'_, A> {
+    /// [`Accel::intersect`].
+    #[inline(always)]
+    pub fn intersect<L: Lanes>(&self, l: L, rays: &Rays<L>, active: L::Mask) -> Hits<L> {
+        l.apart(
+            #[inline(always)]
+            |l| self.0.intersect(l, rays, active),
+        )
+    }
+
+    /// [`Accel::occluded`].
+    #[inline(always)]
+    pub fn occluded<L: Lanes>(&self, l: L, rays: &Rays<L>, active: L::Mask) -> L::Mask {
+        l.apart(
+            #[inline(always)]
+            |l| self.0.occluded(l, rays, active),
+        )
+    }
+
+    /// [`Accel::intersect_all`], each hit as `(lane, hit)`.
+    #[inline(always)]
+    pub fn intersect_all<L: Lanes>(&self, l: L, rays: &Rays<L>, active: L::Mask) -> Vec<Vec<Hit1>> {
+        l.apart(
+            #[inline(always)]
+            |l| {
+                let mut all = vec![vec![]; L::N];
+                self.0
+                    .intersect_all(l, rays, active, &mut |i, h| all[i].push(h));
+                all
+            },
+        )
+    }
+
+    /// [`Accel::intersect_beam`].
+    #[inline(always)]
+    pub fn intersect_beam<L: Lanes>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        hits: &mut [Hits<L>],
+    ) {
+        l.apart(
+            #[inline(always)]
+            |l| self.0.intersect_beam(l, rays, active, hits),
+        )
+    }
+
+    /// [`Accel::occluded_beam`].
+    #[inline(always)]
+    pub fn occluded_beam<L: Lanes>(
+        &self,
+        l: L,
+        rays: &[Rays<L>],
+        active: &[L::Mask],
+        occluded: &mut [L::Mask],
+    ) {
+        l.apart(
+            #[inline(always)]
+            |l| self.0.occluded_beam(l, rays, active, occluded),
+        )
+    }
 }
 
 /// A random scene: `meshes` soups of about `tris` triangles in total (with some planar,
@@ -292,10 +363,10 @@ pub fn check_all_queries<L: Lanes, A: Accel>(
             rng.next_u64() as u32
         };
         let active = l.mask_from_fn(|i| i < chunk.len() && bits >> i & 1 == 1);
-        let hits = accel.intersect(l, &p, active);
-        let occ = accel.occluded(l, &p, active);
-        let mut all = vec![vec![]; L::N];
-        accel.intersect_all(l, &p, active, &mut |i, h| all[i].push(h));
+        let q = Apart(accel);
+        let hits = q.intersect(l, &p, active);
+        let occ = q.occluded(l, &p, active);
+        let all = q.intersect_all(l, &p, active);
         for (i, hits_i) in all.into_iter().enumerate() {
             let r = p.lane(i);
             if active.lane(i) {
@@ -338,8 +409,8 @@ pub fn check_beam_queries<L: Lanes, A: Accel>(
         .collect();
     let mut hits = vec![crate::Hits::miss(l); packets.len()];
     let mut occ = vec![l.splat_mask(false); packets.len()];
-    accel.intersect_beam(l, &packets, &active, &mut hits);
-    accel.occluded_beam(l, &packets, &active, &mut occ);
+    Apart(accel).intersect_beam(l, &packets, &active, &mut hits);
+    Apart(accel).occluded_beam(l, &packets, &active, &mut occ);
     for (j, p) in packets.iter().enumerate() {
         for i in 0..L::N {
             let r = p.lane(i);

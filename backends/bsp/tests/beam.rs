@@ -9,6 +9,22 @@ use coherent_simd::{Kernel, Lanes, SimdMask};
 use glam::Vec3;
 use proptest::prelude::*;
 
+/// [`Bsp::intersect_beam_counted`] out of line, shared by every call as `Apart`'s queries are.
+#[inline(always)]
+fn beam_counted<L: Lanes>(
+    l: L,
+    bsp: &Bsp,
+    rays: &[Rays<L>],
+    active: &[L::Mask],
+    hits: &mut [Hits<L>],
+    c: &mut TraversalStats,
+) {
+    l.apart(
+        #[inline(always)]
+        |l| bsp.intersect_beam_counted(l, rays, active, hits, c),
+    )
+}
+
 /// One random scene, beams of both kinds and several sizes checked against brute force.
 struct RandomBeams {
     seed: u64,
@@ -55,8 +71,8 @@ impl Kernel for Basics {
             let p = [Rays::from_fn(l, |_| r)];
             let mut h = [Hits::miss(l)];
             let mut o = [l.splat_mask(false)];
-            bsp.intersect_beam(l, &p, &[one], &mut h);
-            bsp.occluded_beam(l, &p, &[one], &mut o);
+            Apart(&bsp).intersect_beam(l, &p, &[one], &mut h);
+            Apart(&bsp).occluded_beam(l, &p, &[one], &mut o);
             assert_eq!(h[0].lane(0), bsp.intersect1(&r), "{r:?}");
             assert_eq!(o[0].lane(0), bsp.occluded1(&r), "{r:?}");
         }
@@ -69,16 +85,16 @@ impl Kernel for Basics {
                 let m = l.mask_from_fn(|i| i < c.len());
                 let mut h = [Hits::miss(l)];
                 let mut o = [l.splat_mask(false)];
-                bsp.intersect_beam(l, &p, &[m], &mut h);
-                bsp.occluded_beam(l, &p, &[m], &mut o);
-                let want = bsp.intersect(l, &p[0], m);
+                Apart(&bsp).intersect_beam(l, &p, &[m], &mut h);
+                Apart(&bsp).occluded_beam(l, &p, &[m], &mut o);
+                let want = Apart(&bsp).intersect(l, &p[0], m);
                 for i in 0..L::N {
                     let bits = |h: Option<coherent_accel::Hit1>| {
                         h.map(|h| (h.t.to_bits(), h.u.to_bits(), h.v.to_bits(), h.prim, h.inst))
                     };
                     assert_eq!(bits(h[0].lane(i)), bits(want.lane(i)));
                 }
-                assert_eq!(o[0].bitmask(), bsp.occluded(l, &p[0], m).bitmask());
+                assert_eq!(o[0].bitmask(), Apart(&bsp).occluded(l, &p[0], m).bitmask());
             }
         }
 
@@ -91,9 +107,9 @@ impl Kernel for Basics {
         let all = vec![l.splat_mask(true); packets.len()];
         let mut hits = vec![Hits::miss(l); packets.len()];
         let mut stats = TraversalStats::default();
-        bsp.intersect_beam_counted(l, &packets, &all, &mut hits, &mut stats);
+        beam_counted(l, &bsp, &packets, &all, &mut hits, &mut stats);
         for (p, h) in packets.iter().zip(&hits) {
-            let want = bsp.intersect(l, p, l.splat_mask(true));
+            let want = Apart(&bsp).intersect(l, p, l.splat_mask(true));
             for i in 0..L::N {
                 assert_eq!(
                     h.lane(i).map(|h| (h.prim, h.inst)),
@@ -127,7 +143,7 @@ impl Kernel for Basics {
             .collect();
         let mut hits = vec![Hits::miss(l); packets.len()];
         let mut stats = TraversalStats::default();
-        bsp.intersect_beam_counted(l, &packets, &valid, &mut hits, &mut stats);
+        beam_counted(l, &bsp, &packets, &valid, &mut hits, &mut stats);
         // Lane 1 (a zero component: ray by ray) and lane 2 (against the signs: a group of its
         // own) when they are in a beam of more than one packet; NaN and zero directions are
         // invalid rays, misses, not counted.
@@ -137,7 +153,7 @@ impl Kernel for Basics {
         }
 
         // An empty beam and an empty scene.
-        bsp.intersect_beam(l, &[], &[], &mut []);
+        Apart(&bsp).intersect_beam(l, &[], &[], &mut []);
         let empty = Bsp::build(&Scene::default(), &BspParams::default()).unwrap();
         let (bf, _) = build_both::<Bsp>(&Scene::default(), &BspParams::default());
         check_beam_queries(l, &bf, &empty, &rays, 2).unwrap();
@@ -207,7 +223,7 @@ impl Kernel for HandCounted {
         let all = [l.splat_mask(true); 2];
         let mut hits = [Hits::miss(l); 2];
         let mut c = TraversalStats::default();
-        bsp.intersect_beam_counted(l, &packets, &all, &mut hits, &mut c);
+        beam_counted(l, &bsp, &packets, &all, &mut hits, &mut c);
         for h in &hits {
             assert!(h.hit_mask(l).all(), "every ray hits the quad");
         }
@@ -248,7 +264,7 @@ impl Kernel for HandCounted {
             }
         });
         let mut c = TraversalStats::default();
-        bsp.intersect_beam_counted(l, &up, &all, &mut hits, &mut c);
+        beam_counted(l, &bsp, &up, &all, &mut hits, &mut c);
         assert_eq!(c.beam_mixed_lanes, 1, "{c:?}");
         assert_eq!(hits[1].lane(0), None);
         assert_eq!(c.instance_lanes, lanes - 1, "{c:?}");

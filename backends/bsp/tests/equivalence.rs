@@ -330,7 +330,10 @@ pub fn moving_instances<L: Lanes>(l: L, seed: u64) {
     for c in rays.chunks(L::N) {
         let p = Rays::from_fn(l, |i| c[i % c.len()]);
         let all = l.splat_mask(true);
-        let (a, b) = (bsp.intersect(l, &p, all), fresh.intersect(l, &p, all));
+        let (a, b) = (
+            Apart(&bsp).intersect(l, &p, all),
+            Apart(&fresh).intersect(l, &p, all),
+        );
         for i in 0..L::N {
             assert_eq!(a.lane(i), b.lane(i));
         }
@@ -429,17 +432,22 @@ fn same_unordered_answers<L: Lanes>(
         let pk = Rays::from_fn(l, |i| chunk[i % chunk.len()]);
         let active = l.mask_from_fn(|i| i < chunk.len());
         let (a, b) = (
-            together.occluded(l, &pk, active).bitmask(),
-            split.occluded(l, &pk, active).bitmask(),
+            Apart(&together).occluded(l, &pk, active).bitmask(),
+            Apart(&split).occluded(l, &pk, active).bitmask(),
         );
         if a != b {
             return Err(format!("occlusion together {a:#b}, per sign group {b:#b}"));
         }
         let all = |bsp: &Bsp| {
-            let mut v = vec![];
-            bsp.intersect_all(l, &pk, active, &mut |i, h| {
-                v.push((i, h.inst, h.prim, h.t.to_bits()))
-            });
+            let mut v: Vec<_> = Apart(bsp)
+                .intersect_all(l, &pk, active)
+                .into_iter()
+                .enumerate()
+                .flat_map(|(i, hs)| {
+                    hs.into_iter()
+                        .map(move |h| (i, h.inst, h.prim, h.t.to_bits()))
+                })
+                .collect();
             v.sort_unstable();
             v
         };
