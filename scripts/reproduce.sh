@@ -30,11 +30,16 @@ done
 # fetched here only when the run is not --quick.
 quick=0
 for a in "${args[@]}"; do [[ "$a" == --quick ]] && quick=1; done
+# The full run also compiles the spectral colour forms for every hand-written SIMD backend
+# (the `spectral-simd` feature: the `spectral` experiment's width comparison); the quick run
+# keeps the default build, where they render on scalar alone.
+features=()
 if ((!quick)); then
     python3 scripts/native.py dungeon
+    features=(--features coherent/spectral-simd)
 fi
 if ((native)); then
     RUSTFLAGS="${RUSTFLAGS:-} -C target-cpu=native" CARGO_TARGET_DIR=target/native \
-        cargo run --release -p coherent-experiments --bin reproduce -- "${args[@]}" --out "$out/native"
+        cargo run --release -p coherent-experiments "${features[@]}" --bin reproduce -- "${args[@]}" --out "$out/native"
 fi
-exec cargo run --release -p coherent-experiments --bin reproduce -- "${args[@]}" --out "$out"
+exec cargo run --release -p coherent-experiments "${features[@]}" --bin reproduce -- "${args[@]}" --out "$out"

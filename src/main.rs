@@ -208,6 +208,20 @@ struct RenderArgs {
     /// roulette ends most paths long before).
     #[arg(long)]
     max_bounces: Option<u32>,
+    /// Colour: `rgb` (three channels, the paper's), `hero` (four wavelengths per ray, the
+    /// first drawn per sample, the others spaced evenly) or `bins` (fixed bins over 380-780
+    /// nm). The spectral forms upsample the scene's RGB colours to smooth spectra, show a
+    /// dispersive glass's colours and run on the hand-written backends (scalar, sse, avx2,
+    /// avx512).
+    #[arg(long, default_value = "rgb")]
+    colour: coherent::render::colour::ColourKind,
+    /// Spectral bins, 1 to 1024 (`--colour bins` only; default 32).
+    #[arg(long)]
+    bins: Option<u32>,
+    /// Where a packet's lanes go with `--colour bins`: `rays` (each lane a ray with all of
+    /// its bins) or `wavelengths` (one ray's bins across the lanes). Default rays.
+    #[arg(long)]
+    layout: Option<coherent::render::colour::Layout>,
     /// Render the frame N times in a row and report each frame's seconds and their median
     /// (as `reproduce` times frames; the image and statistics are the last frame's). The
     /// first frame of a run also pays for fresh memory.

@@ -47,6 +47,9 @@ pub struct Optics {
     pub ior: f32,
     /// Scale reflection by the dielectric Fresnel factor and refraction by its complement.
     pub fresnel: bool,
+    /// A glass's index per wavelength, for spectral renders (`None`: `ior` at every
+    /// wavelength; RGB renders take `ior`, the index at the d line).
+    pub dispersion: Option<crate::spectrum::dispersion::Dispersion>,
 }
 
 /// A material: the paper's four components.
@@ -192,6 +195,7 @@ impl Material {
                 transmittance: [0.0; 3],
                 ior: 1.0,
                 fresnel: false,
+                dispersion: None,
             },
             texture: None,
             bdf: None,

@@ -54,6 +54,7 @@ fn scene(name: &str, mesh: Mesh, albedo: f32, light: Light, camera: Camera) -> R
         tonemap: Default::default(),
         background: [0.0; 3],
         motion: Vec::new(),
+        light_spectra: Vec::new(),
     }
 }
 

@@ -296,6 +296,7 @@ fn materials() -> Vec<Material> {
         transmittance: [0.9, 0.95, 0.9],
         ior: 1.5,
         fresnel: true,
+        dispersion: None,
     };
     let mut gold = Material::phong("gold", [0.0; 3], [0.0; 3], 0.0);
     gold.bdf = Some(ggx);

@@ -153,6 +153,7 @@ fn aa_scene(size: SceneSize, width: u32, height: u32) -> anyhow::Result<RenderSc
         tonemap: Default::default(),
         background: [0.0; 3],
         motion: Vec::new(),
+        light_spectra: Vec::new(),
     };
     scene.validate()?;
     Ok(scene)

@@ -355,7 +355,7 @@ mod tests {
             names,
             [
                 "kernels", "accel", "table1", "table2", "table3", "table4", "table5", "aa",
-                "regroup", "builds", "maps", "view", "peers", "imaps"
+                "regroup", "builds", "maps", "view", "peers", "imaps", "spectral"
             ]
         );
     }

@@ -45,12 +45,15 @@ pub enum Loaded {
 }
 
 /// The scenes of `plan`, by name (built-ins by their name, files by their stem), in order:
-/// built-ins as `coherent scenes` lists them, then the files sorted by name.
+/// built-ins as `coherent scenes` lists them (but the showcases, made to be looked at, not
+/// timed), then the files sorted by name.
 pub fn scene_specs(plan: &Plan) -> Vec<(String, String)> {
     let mut specs = Vec::new();
     if plan.builtins {
         for (name, _) in coherent::scene::builtin_names() {
-            specs.push((name.to_owned(), name.to_owned()));
+            if !coherent::scene::builtin::SHOWCASES.contains(&name) {
+                specs.push((name.to_owned(), name.to_owned()));
+            }
         }
     }
     let mut files: Vec<PathBuf> = std::fs::read_dir(&plan.scenes_dir)

@@ -36,6 +36,7 @@ pub mod kernels;
 pub mod maps;
 pub mod peers;
 pub mod regroup;
+pub mod spectral;
 pub mod table1;
 pub mod table2;
 pub mod table3;
@@ -61,4 +62,5 @@ pub const EXPERIMENTS: &[Experiment] = &[
     view::EXPERIMENT,
     peers::EXPERIMENT,
     imaps::EXPERIMENT,
+    spectral::EXPERIMENT,
 ];

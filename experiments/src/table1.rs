@@ -244,6 +244,7 @@ fn splits(ctx: &Ctx, backends: &[Backend], inputs: &BdfInputs) -> anyhow::Result
         transmittance: [0.9; 3],
         ior: 1.5,
         fresnel: true,
+        dispersion: None,
     };
     let materials = [metal, plastic, glass];
     let mut csv = ctx.csv("table1_splits.csv", SPLITS_HEADER)?;

@@ -94,13 +94,13 @@ const H: f32 = 3.0;
 
 /// The shading points, structure of arrays, in packet order (tiles of neighbours).
 pub struct Points {
-    p: [Vec<f32>; 3],
-    n: [Vec<f32>; 3],
-    u: [Vec<f32>; 2],
+    pub(crate) p: [Vec<f32>; 3],
+    pub(crate) n: [Vec<f32>; 3],
+    pub(crate) u: [Vec<f32>; 2],
 }
 
 impl Points {
-    fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.p[0].len()
     }
 }
@@ -216,8 +216,9 @@ fn gonio_table() -> PhotometricTable {
     }
 }
 
-/// The lights of the table, by name: all above the ground, facing it.
-fn lights() -> anyhow::Result<Vec<(&'static str, Light)>> {
+/// The lights of the table, by name: all above the ground, facing it (the `spectral`
+/// experiment times its colour forms on them too).
+pub(crate) fn lights() -> anyhow::Result<Vec<(&'static str, Light)>> {
     let top = Vec3::new(0.2, 0.1, H);
     let gonio = |lookup| {
         Goniodiagram::new(

@@ -17,6 +17,7 @@ use coherent::film::{
 };
 use coherent::illum::{DEFAULT_CELLS, IllumMap, MapOptions, Mode};
 use coherent::median::median;
+use coherent::render::colour::{ColourForm, spectral_backends, spectral_refusal};
 use coherent::render::indirect::DEFAULT_MAX_BOUNCES;
 use coherent::render::{
     AovBuffer, AovKind, Indirect, IndirectMode, Packets, RayKind, RenderStats, Renderer,
@@ -30,8 +31,28 @@ use crate::RenderArgs;
 
 /// Checks the cheap things before loading anything: the backend, the accelerator's name, the
 /// output's type and folder, the thread count.
-fn check_args(args: &RenderArgs) -> anyhow::Result<(Backend, AccelKind)> {
-    let backend = super::backend_arg(args.backend.as_deref())?;
+fn check_args(args: &RenderArgs) -> anyhow::Result<(Backend, AccelKind, ColourForm)> {
+    let colour =
+        ColourForm::from_flags(args.colour, args.bins, args.layout).map_err(anyhow::Error::msg)?;
+    let backend = match (colour.is_spectral(), args.backend.as_deref()) {
+        // The spectral renderer is compiled for a few backends alone.
+        (true, None) => spectral_backends()
+            .filter(|b| b.is_available())
+            .last()
+            .unwrap_or(Backend::Scalar),
+        (_, name) => super::backend_arg(name)?,
+    };
+    if colour.is_spectral() {
+        if let Some(why) = spectral_refusal(&colour, backend) {
+            bail!("--backend {}: {why}", backend.name());
+        }
+        if args.regroup {
+            bail!(
+                "--regroup: spectral colour ({}) runs with the paper's packets; leave out --regroup",
+                colour.label()
+            );
+        }
+    }
     let kind: AccelKind = args.accel.parse()?;
     match args.out.extension().and_then(|e| e.to_str()) {
         Some(e) if e.eq_ignore_ascii_case("exr") || e.eq_ignore_ascii_case("png") => {}
@@ -53,7 +74,7 @@ fn check_args(args: &RenderArgs) -> anyhow::Result<(Backend, AccelKind)> {
             dir.display()
         );
     }
-    Ok((backend, kind))
+    Ok((backend, kind, colour))
 }
 
 /// Particles of a new illumination map unless `--particles` says otherwise.
@@ -233,7 +254,7 @@ fn film_method(args: &RenderArgs, scene: &RenderScene) -> Method {
 
 /// Runs `coherent render`.
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
-    let (backend, kind) = check_args(args)?;
+    let (backend, kind, colour) = check_args(args)?;
     let t_load = Instant::now();
     let (scene, objects, merged) = load_scene(args)?;
     let (w, h) = (scene.width, scene.height);
@@ -305,6 +326,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     renderer.regroup = args.regroup;
     renderer.packets = args.packets;
     renderer.time_stages = args.stages;
+    renderer
+        .set_colour(colour)
+        .context("the colour form's spectra")?;
     let aov = (!args.aov.is_empty()).then(|| Arc::new(AovBuffer::new(w, h)));
     renderer.aov = aov.clone();
 
@@ -347,7 +371,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let st = &rendered.stats;
     let rays = st.total_rays();
     println!(
-        "{}: {}x{} {} ({} triangles, {}), {} + {}{}{}, {} thread(s), {}: {:.3} s ({:.1} Mrays/s); rays: {}; \
+        "{}: {}x{} {} ({} triangles, {}), {} + {}{}{}{}, {} thread(s), {}: {:.3} s ({:.1} Mrays/s); rays: {}; \
          active lanes per packet (of {}): {}; by depth: {}; material passes per packet {:.2}; \
          build {:.3} s, {:.1} MB; load {:.3} s -> {}",
         scene.name,
@@ -360,6 +384,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         kind,
         packets_text(args),
         indirect_text(args),
+        match colour {
+            ColourForm::Rgb => String::new(),
+            c => format!(", {} colour", c.label()),
+        },
         threads,
         stop_text(&rendered),
         seconds.as_secs_f64(),

@@ -56,7 +56,7 @@ struct TracePackets<'a, T> {
 impl<T: SampleTracer> Kernel for TracePackets<'_, T> {
     type Output = (Vec<PacketOut>, T::Stats);
     // The factor table renders frames with the scalar backend's estimates.
-    const BACKENDS: u32 = Backend::WITH_FACTORS;
+    const BACKENDS: u32 = Backend::WITH_FACTORS & T::BACKENDS;
 
     #[inline(always)]
     fn run<L: Lanes>(self, l: L) -> Self::Output {

@@ -219,7 +219,8 @@ pub struct PassReport<'a> {
     pub film: &'a Film,
 }
 
-/// Samples whose radiance was fixed up (set to 0): NaN or infinite, or negative.
+/// Samples whose radiance was fixed up (set to 0): NaN or infinite, or negative (where the
+/// tracer's samples are not signed, [`SampleTracer::SIGNED`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Fixups {
     pub non_finite: u64,

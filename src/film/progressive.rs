@@ -59,7 +59,7 @@ impl<'t, T: SampleTracer> Progressive<'t, T> {
         let (colors, s) = trace_points(backend, tracer, &points, sp.nx as usize + 1)?;
         T::merge_stats(&mut stats, s);
         for (c, v) in sp.corners.iter_mut().zip(colors) {
-            *c = fix(v, &mut fixups);
+            *c = fix(v, T::SIGNED, &mut fixups);
         }
         let adaptation = Adaptation::from_luminances(sp.corners.iter().map(|c| luminance(*c)));
         let tonemap = ToneMap::new(opts.tonemap, adaptation, opts.display);

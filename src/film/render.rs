@@ -311,9 +311,10 @@ pub(super) fn luminance(c: [f32; 3]) -> f32 {
     0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 }
 
-/// Sets NaN/infinite and negative channels to 0, counting the samples fixed.
+/// Sets NaN/infinite channels to 0, and negative ones unless the tracer's samples are signed
+/// ([`SampleTracer::SIGNED`]), counting the samples fixed.
 #[inline]
-pub(super) fn fix(mut c: [f32; 3], f: &mut Fixups) -> [f32; 3] {
+pub(super) fn fix(mut c: [f32; 3], signed: bool, f: &mut Fixups) -> [f32; 3] {
     if c.iter().any(|v| !v.is_finite()) {
         f.non_finite += 1;
         for v in &mut c {
@@ -322,7 +323,7 @@ pub(super) fn fix(mut c: [f32; 3], f: &mut Fixups) -> [f32; 3] {
             }
         }
     }
-    if c.iter().any(|&v| v < 0.0) {
+    if !signed && c.iter().any(|&v| v < 0.0) {
         f.negative += 1;
         for v in &mut c {
             *v = v.max(0.0);
@@ -660,7 +661,11 @@ fn pass_tile<T: SampleTracer>(
         let (mut cx, mut cy, mut n) = (0.0f64, 0.0f64, 0u32);
         for m in 0..lanes {
             if bits >> m & 1 == 1 {
-                band.add(pix[m] as usize, knum[m], fix(rgb[m], &mut out.fixups));
+                band.add(
+                    pix[m] as usize,
+                    knum[m],
+                    fix(rgb[m], T::SIGNED, &mut out.fixups),
+                );
                 cx += p.xs[m] as f64;
                 cy += p.ys[m] as f64;
                 n += 1;

@@ -10,6 +10,15 @@ pub trait SampleTracer: Sync {
     /// Per-task statistics (rays by kind, active lanes per stage, NaN count...), merged in a
     /// fixed order.
     type Stats: Default + Send;
+    /// The backends the tracer is compiled for ([`coherent_simd::Kernel::BACKENDS`]): on
+    /// any other the film says it cannot run it.
+    const BACKENDS: u32 = coherent_simd::Backend::WITH_FACTORS;
+    /// Whether a sample's RGB may be negative by design: a spectral sample carries a few
+    /// wavelengths (one, past a dispersive refraction), whose colour can lie outside the
+    /// display's gamut. The film then keeps negative channels, since zeroing them per sample
+    /// would bias every pixel such samples reach toward brighter and redder; the average
+    /// converges into the gamut, and the display clips what is left.
+    const SIGNED: bool = false;
     fn merge_stats(into: &mut Self::Stats, from: Self::Stats);
     /// Radiance arriving through the image plane at continuous pixel coordinates `(xs, ys)`
     /// (pixel `(i, j)` covers `[i, i+1) x [j, j+1)`, y down) for the active lanes (inactive

@@ -56,6 +56,7 @@ fn furnace(rho: f32, subdivisions: u32, r: f32, intensity: f32) -> RenderScene {
         tonemap: Default::default(),
         background: [0.0; 3],
         motion: Vec::new(),
+        light_spectra: Vec::new(),
     }
 }
 

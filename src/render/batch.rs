@@ -23,6 +23,7 @@
 use coherent_accel::{Accel, Hits, Rays, Work};
 use coherent_simd::{Lanes, MAX_LANES, Rgbs, SimdF32, SimdI32, SimdMask, Vec3s};
 
+use super::colour::Colour;
 use super::stats::StageClock;
 use super::{AovBuffer, Differentials, Packets, RenderStats, Renderer, Segment, Stage};
 use crate::film::{PacketIn, PacketOut};
@@ -45,9 +46,10 @@ impl<A: Accel> Renderer<'_, A> {
     /// depth-first per packet, or regrouped when `self.regroup` is on. NaN lanes are counted
     /// in `stats.nan` and zeroed.
     #[inline(always)]
-    pub(super) fn trace_batch_lanes<L: Lanes>(
+    pub(super) fn trace_batch_in<L: Lanes, C: Colour<L>>(
         &self,
         l: L,
+        t: &C::Tables,
         packets: &[PacketIn],
         stats: &mut RenderStats,
     ) -> Vec<PacketOut> {
@@ -57,11 +59,11 @@ impl<A: Accel> Renderer<'_, A> {
         let mut acc = vec![[0.0f32; 3]; packets.len() * n];
         // Segments ready to trace (the top first): depth-first, a packet's children; with
         // regrouping, the packed segments of the current generation.
-        let mut ready: Vec<Segment<L>> = Vec::new();
+        let mut ready: Vec<Segment<L, C>> = Vec::new();
         // The children of the segment just traced.
-        let mut children: Vec<Segment<L>> = Vec::new();
+        let mut children: Vec<Segment<L, C>> = Vec::new();
         // With regrouping, the next generation's segments as they come.
-        let mut generation: Vec<Segment<L>> = Vec::new();
+        let mut generation: Vec<Segment<L, C>> = Vec::new();
         let mut lanes: Vec<Lane> = Vec::new();
         let mut next_packet = 0;
         // With per-pixel maps, each sample's pixel (by slot) and one sample more there.
@@ -87,9 +89,10 @@ impl<A: Accel> Renderer<'_, A> {
         };
         // The hits of the camera packet about to be traced, when the beam found them.
         let mut traced: Option<Hits<L>> = None;
-        let mut radiance = Rgbs::zero(l);
-        // The camera packet whose tree is being traced depth-first.
-        let mut root = (l.splat_mask(false), l.lane_ids());
+        let mut radiance = C::zero(l, t);
+        // The camera packet whose tree is being traced depth-first (its lanes, slots and
+        // sample ids).
+        let mut root = (l.splat_mask(false), l.lane_ids(), l.splat_i32(0));
         loop {
             let seg = if let Some(s) = ready.pop() {
                 s
@@ -98,6 +101,7 @@ impl<A: Accel> Renderer<'_, A> {
                 let active = l.mask_from_bits(p.bits);
                 let mut s = self.camera_segment(
                     l,
+                    t,
                     l.load(&p.xs),
                     l.load(&p.ys),
                     l.load_i32(&p.ids),
@@ -105,7 +109,7 @@ impl<A: Accel> Renderer<'_, A> {
                 );
                 s.slot = l.lane_ids() + l.splat_i32((next_packet * n) as i32);
                 traced = camera_hits.get(next_packet).copied();
-                root = (active, s.slot);
+                root = (active, s.slot, s.ids);
                 next_packet += 1;
                 clock.lap(stats, Stage::Other);
                 s
@@ -121,6 +125,7 @@ impl<A: Accel> Renderer<'_, A> {
             let t0 = aov.map(|_| std::time::Instant::now());
             self.segment(
                 l,
+                t,
                 &seg,
                 traced.take().as_ref(),
                 &mut radiance,
@@ -136,15 +141,17 @@ impl<A: Accel> Renderer<'_, A> {
                 charge(a, &pixels, seg.active, seg.slot, work, ns);
             }
             if self.regroup {
-                file(&mut acc, seg.active, seg.slot, &radiance);
-                radiance = Rgbs::zero(l);
+                let rgb = radiance.to_rgb(l, t, &C::waves(l, t, seg.ids));
+                file(&mut acc, seg.active, seg.slot, &rgb);
+                radiance = C::zero(l, t);
                 generation.append(&mut children);
             } else {
                 // Depth-first: the last child pushed is traced next.
                 ready.append(&mut children);
                 if ready.is_empty() {
-                    file(&mut acc, root.0, root.1, &radiance);
-                    radiance = Rgbs::zero(l);
+                    let rgb = radiance.to_rgb(l, t, &C::waves(l, t, root.2));
+                    file(&mut acc, root.0, root.1, &rgb);
+                    radiance = C::zero(l, t);
                 }
             }
         }
@@ -230,10 +237,10 @@ impl<A: Accel> Renderer<'_, A> {
 /// when every segment was compacted than when full ones passed: within this machine's
 /// run-to-run noise, but in the same direction on each).
 #[inline(always)]
-fn regroup<L: Lanes>(
+fn regroup<L: Lanes, C: Colour<L>>(
     l: L,
-    generation: &mut Vec<Segment<L>>,
-    ready: &mut Vec<Segment<L>>,
+    generation: &mut Vec<Segment<L, C>>,
+    ready: &mut Vec<Segment<L, C>>,
     lanes: &mut Vec<Lane>,
 ) {
     let mut order: Vec<usize> = (0..generation.len()).collect();
@@ -249,7 +256,7 @@ fn regroup<L: Lanes>(
         lanes.clear();
         for &i in node {
             if generation[i].active.all() {
-                packed.push(generation[i]);
+                packed.push(generation[i].clone());
             } else {
                 lift(&generation[i], lanes);
             }
@@ -341,8 +348,8 @@ fn file<L: Lanes>(acc: &mut [[f32; 3]], active: L::Mask, slot: L::I32s, radiance
 
 /// The per-lane values of `seg`, in [`FIELDS`] order.
 #[inline(always)]
-fn fields<L: Lanes>(seg: &Segment<L>) -> [L::F32s; FIELDS] {
-    let (r, d, t) = (&seg.rays, &seg.diff, &seg.throughput);
+fn fields<L: Lanes, C: Colour<L>>(seg: &Segment<L, C>) -> [L::F32s; FIELDS] {
+    let (r, d, t) = (&seg.rays, &seg.diff, seg.throughput.rgb_fields());
     [
         r.origin.x,
         r.origin.y,
@@ -364,15 +371,15 @@ fn fields<L: Lanes>(seg: &Segment<L>) -> [L::F32s; FIELDS] {
         d.ddir_dy.x,
         d.ddir_dy.y,
         d.ddir_dy.z,
-        t.r,
-        t.g,
-        t.b,
+        t[0],
+        t[1],
+        t[2],
     ]
 }
 
 /// Appends the active lanes of `seg` to `out`, in lane order.
 #[inline(always)]
-fn lift<L: Lanes>(seg: &Segment<L>, out: &mut Vec<Lane>) {
+fn lift<L: Lanes, C: Colour<L>>(seg: &Segment<L, C>, out: &mut Vec<Lane>) {
     let mut f = [[0.0f32; MAX_LANES]; FIELDS];
     for (a, v) in f.iter_mut().zip(fields(seg)) {
         v.store(a);
@@ -403,7 +410,7 @@ fn lift<L: Lanes>(seg: &Segment<L>, out: &mut Vec<Lane>) {
 /// A packet of `lanes` (1 to `L::N` of them) at the node of the ray tree of `like`. Lanes
 /// past the last copy it and are inactive, so they compute on valid numbers.
 #[inline(always)]
-fn pack<L: Lanes>(l: L, lanes: &[Lane], like: &Segment<L>) -> Segment<L> {
+fn pack<L: Lanes, C: Colour<L>>(l: L, lanes: &[Lane], like: &Segment<L, C>) -> Segment<L, C> {
     let mut f = [[0.0f32; MAX_LANES]; FIELDS];
     let mut light = [0i32; MAX_LANES];
     let mut id = [0i32; MAX_LANES];
@@ -463,11 +470,8 @@ fn pack<L: Lanes>(l: L, lanes: &[Lane], like: &Segment<L>) -> Segment<L> {
             },
         },
         active: l.mask_from_bits((1u32 << lanes.len()) - 1),
-        throughput: Rgbs {
-            r: v[20],
-            g: v[21],
-            b: v[22],
-        },
+        throughput: C::from_rgb_fields([v[20], v[21], v[22]]),
+        wave: like.wave,
         depth: like.depth,
         bounces: like.bounces,
         kind: like.kind,

@@ -33,6 +33,8 @@ use std::sync::Arc;
 use coherent_accel::{Accel, Rays};
 use coherent_simd::{Lanes, Rgbs, SimdF32, SimdI32, SimdMask, Vec3s};
 
+use super::colour::Colour;
+
 use super::{Differentials, RayKind, Renderer, Segment, Surface, rng};
 use crate::illum::IllumMap;
 use crate::light::sincos::sincos;
@@ -153,34 +155,36 @@ impl<A: Accel> Renderer<'_, A> {
     /// transmissive ones outward).
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    pub(super) fn spawn_diffuse<L: Lanes>(
+    pub(super) fn spawn_diffuse<L: Lanes, C: Colour<L>>(
         &self,
         l: L,
-        seg: &Segment<L>,
+        t: &C::Tables,
+        w: &C::Waves,
+        seg: &Segment<L, C>,
         surf: &Surface<L>,
         ns: &Vec3s<L>,
         ng: &Vec3s<L>,
         albedo: &Rgbs<L>,
         hit: L::Mask,
-        pending: &mut Vec<Segment<L>>,
+        pending: &mut Vec<Segment<L, C>>,
     ) {
         let zero = l.splat(0.0);
         let one = l.splat(1.0);
         let wo = -seg.rays.dir;
-        let mut tp = seg.throughput * *albedo;
-        let mut on = hit & tp.r.max(tp.g).max(tp.b).gt(zero);
+        let mut tp = seg.throughput.times(l, t, w, *albedo);
+        let mut on = hit & tp.max_channel(l, t).gt(zero);
         if on.none() {
             return;
         }
         let stream = rng::hash1(seg.path.wrapping_mul(0x85eb_ca6b) ^ 0xd1ff_05e0);
         if seg.bounces >= RR_START {
-            let q = tp.r.max(tp.g).max(tp.b).min(l.splat(RR_MAX_SURVIVAL));
+            let q = tp.max_channel(l, t).min(l.splat(RR_MAX_SURVIVAL));
             let u = rng::uniform(l, seg.ids, stream ^ 0x3333_3333);
             on &= u.lt(q);
             if on.none() {
                 return;
             }
-            tp = tp.scale(one / on.select(q, one));
+            tp.scale(l, t, one / on.select(q, one));
         }
         // Cosine-weighted about the shading normal on the viewer's side.
         let n = Vec3s::select(ns.dot(wo).lt(zero), -*ns, *ns);
@@ -217,6 +221,7 @@ impl<A: Accel> Renderer<'_, A> {
             },
             active: on,
             throughput: tp,
+            wave: seg.wave,
             depth: seg.depth,
             bounces: seg.bounces + 1,
             kind: RayKind::Diffuse,

@@ -42,6 +42,7 @@
 pub mod aov;
 mod batch;
 pub mod centres;
+pub mod colour;
 pub mod indirect;
 pub mod light_samples;
 pub mod packets;
@@ -60,6 +61,7 @@ use crate::scene::RenderScene;
 use crate::texture::lod_from_differentials;
 
 pub use aov::{AovBuffer, AovKind};
+use colour::{Colour, ColourError, ColourForm, Spectra, Spectral};
 pub use indirect::{Indirect, IndirectMode};
 pub use light_samples::LightSamples;
 pub use packets::Packets;
@@ -100,15 +102,22 @@ pub struct Renderer<'s, A: Accel> {
     pub indirect: Indirect,
     /// The image's width in pixels (for [`LightSamples::Tile`]).
     width: u32,
+    /// How colour is carried (RGB by default; [`Renderer::set_colour`]).
+    colour: ColourForm,
+    /// A spectral form's tables.
+    spectra: Option<Spectra>,
 }
 
 /// A packet of rays in flight with its per-lane state.
-#[derive(Clone, Copy)]
-struct Segment<L: Lanes> {
+#[derive(Clone)]
+struct Segment<L: Lanes, C> {
     rays: Rays<L>,
     diff: Differentials<L>,
     active: L::Mask,
-    throughput: Rgbs<L>,
+    throughput: C,
+    /// Per lane, the one wavelength a spectral ray keeps after a dispersive refraction
+    /// (`colour.rs`), or -1 while it carries all of them.
+    wave: L::I32s,
     /// Mirror and refraction generations above this one (capped by the scene's depth).
     depth: u32,
     /// Diffuse bounces above this one (path tracing's, capped on their own).
@@ -158,7 +167,23 @@ impl<'s, A: Accel> Renderer<'s, A> {
             aov: None,
             indirect: Indirect::None,
             width,
+            colour: ColourForm::Rgb,
+            spectra: None,
         })
+    }
+
+    /// Carries colour as `form` from now on: RGB, or a spectral form (hero wavelengths or
+    /// bins), which [`render_frame`] renders on the backends of
+    /// [`colour::SPECTRAL_BACKENDS`].
+    pub fn set_colour(&mut self, form: ColourForm) -> Result<(), ColourError> {
+        self.spectra = Spectra::new(form, self.scene)?;
+        self.colour = form;
+        Ok(())
+    }
+
+    /// How colour is carried.
+    pub fn colour(&self) -> ColourForm {
+        self.colour
     }
 
     /// The accelerator.
@@ -203,13 +228,29 @@ impl<'s, A: Accel> Renderer<'s, A> {
         active: L::Mask,
         stats: &mut RenderStats,
     ) -> Rgbs<L> {
+        self.trace_one::<L, Rgbs<L>>(l, &(), xs, ys, ids, active, stats)
+    }
+
+    /// [`Renderer::trace_packet`] in colour form `C`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn trace_one<L: Lanes, C: Colour<L>>(
+        &self,
+        l: L,
+        t: &C::Tables,
+        xs: L::F32s,
+        ys: L::F32s,
+        ids: L::I32s,
+        active: L::Mask,
+        stats: &mut RenderStats,
+    ) -> Rgbs<L> {
         // Through the batch driver, as one packet (the film traces whole batches).
         let mut p = crate::film::PacketIn::default();
         xs.store(&mut p.xs);
         ys.store(&mut p.ys);
         ids.store(&mut p.ids);
         p.bits = active.bitmask();
-        let out = self.trace_batch_lanes(l, std::slice::from_ref(&p), stats);
+        let out = self.trace_batch_in::<L, C>(l, t, std::slice::from_ref(&p), stats);
         let c = &out[0];
         let mut rgb = [[0.0f32; MAX_LANES]; 3];
         for m in 0..L::N {
@@ -226,14 +267,15 @@ impl<'s, A: Accel> Renderer<'s, A> {
 
     /// The camera rays through the image points `(xs, ys)` as the root of a ray tree.
     #[inline(always)]
-    fn camera_segment<L: Lanes>(
+    fn camera_segment<L: Lanes, C: Colour<L>>(
         &self,
         l: L,
+        t: &C::Tables,
         xs: L::F32s,
         ys: L::F32s,
         ids: L::I32s,
         active: L::Mask,
-    ) -> Segment<L> {
+    ) -> Segment<L, C> {
         let cam = self.camera.rays(l, xs, ys);
         let zero3 = Vec3s::splat(l, glam::Vec3::ZERO);
         Segment {
@@ -245,7 +287,8 @@ impl<'s, A: Accel> Renderer<'s, A> {
                 ddir_dy: cam.ddir_dy,
             },
             active,
-            throughput: Rgbs::splat(l, [1.0; 3]),
+            throughput: C::one(l, t),
+            wave: l.splat_i32(-1),
             depth: 0,
             bounces: 0,
             kind: RayKind::Primary,
@@ -260,14 +303,16 @@ impl<'s, A: Accel> Renderer<'s, A> {
     /// shaded and lit into `radiance`, its reflection and refraction packets go to `pending`.
     /// The light samples' random numbers derive from `seg.light_ids`. With per-pixel maps on,
     /// the queries add what they did to `stats.work`.
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn segment<L: Lanes>(
+    fn segment<L: Lanes, C: Colour<L>>(
         &self,
         l: L,
-        seg: &Segment<L>,
+        t: &C::Tables,
+        seg: &Segment<L, C>,
         traced: Option<&Hits<L>>,
-        radiance: &mut Rgbs<L>,
-        pending: &mut Vec<Segment<L>>,
+        radiance: &mut C,
+        pending: &mut Vec<Segment<L, C>>,
         stats: &mut RenderStats,
     ) {
         let zero = l.splat(0.0);
@@ -278,6 +323,7 @@ impl<'s, A: Accel> Renderer<'s, A> {
         let mut clock = StageClock::start(self.time_stages);
         stats.count(seg.kind, n_active);
         stats.count_depth((seg.depth + seg.bounces) as usize, n_active);
+        let w = C::waves(l, t, seg.ids);
         let dir = seg.rays.dir;
         let hits = match traced {
             Some(h) => *h,
@@ -313,7 +359,7 @@ impl<'s, A: Accel> Renderer<'s, A> {
                     bg += light.radiance_seen(l, &dir);
                 }
             }
-            *radiance += Rgbs::select(miss, seg.throughput * bg, Rgbs::zero(l));
+            radiance.add_emitted(l, t, &w, miss, &seg.throughput, bg);
         }
         if hit.none() {
             clock.lap(stats, Stage::Other);
@@ -356,9 +402,9 @@ impl<'s, A: Accel> Renderer<'s, A> {
         // diffusely, without its ambient term (see `indirect.rs`).
         let bounced = seg.bounces > 0;
         let mut lit = if bounced {
-            Rgbs::zero(l)
+            C::zero(l, t)
         } else {
-            Rgbs::select(hit, base.ambient, Rgbs::zero(l))
+            C::emitted(l, t, &w, hit, base.ambient)
         };
         // Indirect light sees the diffuse albedo (at the mip levels just found); a map gives
         // it the irradiance at the hit.
@@ -369,7 +415,7 @@ impl<'s, A: Accel> Renderer<'s, A> {
         if let Indirect::Map(map) = &self.indirect {
             let e = map.irradiance(l, hits.inst, hits.prim, hits.u, hits.v, hit);
             let f = albedo.scale(l.splat(std::f32::consts::FRAC_1_PI));
-            lit += Rgbs::select(hit, f * e, Rgbs::zero(l));
+            lit.add_reflected(l, t, &w, hit, f, e, None);
         }
         clock.lap(stats, Stage::Shading);
 
@@ -378,21 +424,22 @@ impl<'s, A: Accel> Renderer<'s, A> {
         if can_light.any() {
             let diffuse = bounced.then_some(&albedo);
             self.light_passes(
-                l, seg, &surf, &ns, can_light, diffuse, &mut ctx, &mut lit, &mut clock, stats,
+                l, t, &w, seg, &surf, &ns, can_light, diffuse, &mut ctx, &mut lit, &mut clock,
+                stats,
             );
         }
-        *radiance += seg.throughput * lit;
+        radiance.add_product(&seg.throughput, &lit);
 
         if let Indirect::Path { max_bounces } = self.indirect
             && seg.bounces < max_bounces
         {
-            self.spawn_diffuse(l, seg, &surf, &ns, &ng, &albedo, hit, pending);
+            self.spawn_diffuse(l, t, &w, seg, &surf, &ns, &ng, &albedo, hit, pending);
         }
         if seg.depth >= self.depth {
             clock.lap(stats, Stage::Other);
             return;
         }
-        self.spawn_secondaries(l, seg, &surf, &ns, &ng, &base, hit, pending);
+        self.spawn_secondaries(l, t, &w, seg, &surf, &ns, &ng, &base, hit, pending);
         clock.lap(stats, Stage::Other);
     }
 
@@ -402,16 +449,18 @@ impl<'s, A: Accel> Renderer<'s, A> {
     /// material pass, the diffuse reflection of that albedo alone.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn light_passes<L: Lanes>(
+    fn light_passes<L: Lanes, C: Colour<L>>(
         &self,
         l: L,
-        seg: &Segment<L>,
+        t: &C::Tables,
+        w: &C::Waves,
+        seg: &Segment<L, C>,
         surf: &Surface<L>,
         ns: &Vec3s<L>,
         can_light: L::Mask,
         diffuse: Option<&Rgbs<L>>,
         ctx: &mut ShadeHits<L>,
-        lit: &mut Rgbs<L>,
+        lit: &mut C,
         clock: &mut StageClock,
         stats: &mut RenderStats,
     ) {
@@ -456,7 +505,7 @@ impl<'s, A: Accel> Renderer<'s, A> {
                     ctx.active = visible;
                     self.shade_materials(l, ctx, None, &ls.wi, stats).reflected
                 };
-                *lit += Rgbs::select(visible, reflected * ls.li, Rgbs::zero(l));
+                lit.add_reflected(l, t, w, visible, reflected, ls.li, Some(li));
                 clock.lap(stats, Stage::Shading);
             }
         }
@@ -466,16 +515,18 @@ impl<'s, A: Accel> Renderer<'s, A> {
     /// material weights them, to be traced after this one.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn spawn_secondaries<L: Lanes>(
+    fn spawn_secondaries<L: Lanes, C: Colour<L>>(
         &self,
         l: L,
-        seg: &Segment<L>,
+        t: &C::Tables,
+        w: &C::Waves,
+        seg: &Segment<L, C>,
         surf: &Surface<L>,
         ns: &Vec3s<L>,
         ng: &Vec3s<L>,
         base: &Shading<L>,
         hit: L::Mask,
-        pending: &mut Vec<Segment<L>>,
+        pending: &mut Vec<Segment<L, C>>,
     ) {
         let zero = l.splat(0.0);
         let dir = seg.rays.dir;
@@ -505,7 +556,8 @@ impl<'s, A: Accel> Renderer<'s, A> {
                     ddir_dy: seg.diff.ddir_dy - ns * (seg.diff.ddir_dy.dot(ns) * 2.0),
                 },
                 active: refl_on,
-                throughput: seg.throughput * base.reflection,
+                throughput: seg.throughput.times(l, t, w, base.reflection),
+                wave: seg.wave,
                 depth: seg.depth + 1,
                 bounces: seg.bounces,
                 kind: RayKind::Reflection,
@@ -520,7 +572,17 @@ impl<'s, A: Accel> Renderer<'s, A> {
         // their energy went to the reflection weight through the Fresnel factor).
         let refr_on = hit & tw.r.max(tw.g).max(tw.b).gt(zero);
         if refr_on.any() {
-            let ior = l.gather(&self.ior, surf.material.max(l.splat_i32(0)));
+            let material = surf.material.max(l.splat_i32(0));
+            let mut ior = l.gather(&self.ior, material);
+            // A spectral ray keeps one wavelength through a dispersive glass (`colour.rs`).
+            let mut wave = seg.wave;
+            let mut dispersed = None;
+            if C::SPECTRAL {
+                let mut tp = seg.throughput.times(l, t, w, base.refraction);
+                let u = rng::uniform(l, seg.ids, rng::hash1(seg.path ^ 0x6469_7370));
+                ior = tp.disperse(l, t, w, refr_on, material, ior, &mut wave, u);
+                dispersed = Some(tp);
+            }
             let (t_dir, inv_eta, tir) = refract(l, &dir, &ns, ior);
             let on = refr_on.and_not(tir);
             if on.any() {
@@ -539,7 +601,9 @@ impl<'s, A: Accel> Renderer<'s, A> {
                         ddir_dy: seg.diff.ddir_dy * inv_eta,
                     },
                     active: on,
-                    throughput: seg.throughput * base.refraction,
+                    throughput: dispersed
+                        .unwrap_or_else(|| seg.throughput.times(l, t, w, base.refraction)),
+                    wave,
                     depth: seg.depth + 1,
                     bounces: seg.bounces,
                     kind: RayKind::Refraction,
@@ -638,7 +702,61 @@ pub fn render_frame(
     opts: &crate::film::FilmOptions,
     progress: &(dyn Fn(&crate::film::PassReport) + Sync),
 ) -> Result<crate::film::Rendered<RenderStats>, crate::film::FilmError> {
-    crate::film::render(backend, renderer, opts, progress)
+    let Some(spectra) = &renderer.spectra else {
+        return crate::film::render(backend, renderer, opts, progress);
+    };
+    let form = renderer.colour.label();
+    if renderer.regroup {
+        let e = ColourError::Regroup { form };
+        return Err(crate::film::FilmError::Options(e.to_string()));
+    }
+    if let Some(why) = colour::spectral_refusal(&renderer.colour, backend) {
+        return Err(crate::film::FilmError::Options(why));
+    }
+    let frames = SpectralFrames { renderer, spectra };
+    crate::film::render(backend, &frames, opts, progress)
+}
+
+/// A renderer in a spectral colour form, as the film sees it: compiled for
+/// [`colour::SPECTRAL_BACKENDS`] alone, since each backend is a second copy of the renderer.
+struct SpectralFrames<'r, 's, A: Accel> {
+    renderer: &'r Renderer<'s, A>,
+    spectra: &'r Spectra,
+}
+
+impl<A: Accel> crate::film::SampleTracer for SpectralFrames<'_, '_, A> {
+    type Stats = RenderStats;
+    const BACKENDS: u32 = colour::SPECTRAL_BACKENDS;
+    const SIGNED: bool = true;
+
+    fn merge_stats(into: &mut RenderStats, from: RenderStats) {
+        into.merge(from);
+    }
+
+    #[inline(always)]
+    fn trace<L: Lanes>(
+        &self,
+        l: L,
+        xs: L::F32s,
+        ys: L::F32s,
+        ids: L::I32s,
+        active: L::Mask,
+        stats: &mut RenderStats,
+    ) -> Rgbs<L> {
+        self.renderer
+            .trace_one::<L, Spectral<L>>(l, self.spectra, xs, ys, ids, active, stats)
+    }
+
+    #[inline(always)]
+    fn trace_batch<L: Lanes>(
+        &self,
+        l: L,
+        packets: &[crate::film::PacketIn],
+        stats: &mut RenderStats,
+    ) -> Vec<crate::film::PacketOut> {
+        self.renderer
+            .trace_batch_in::<L, Spectral<L>>(l, self.spectra, packets, stats)
+    }
 }
 
 impl<A: Accel> crate::film::SampleTracer for Renderer<'_, A> {
@@ -668,6 +786,6 @@ impl<A: Accel> crate::film::SampleTracer for Renderer<'_, A> {
         packets: &[crate::film::PacketIn],
         stats: &mut RenderStats,
     ) -> Vec<crate::film::PacketOut> {
-        self.trace_batch_lanes(l, packets, stats)
+        self.trace_batch_in::<L, Rgbs<L>>(l, &(), packets, stats)
     }
 }

@@ -601,7 +601,7 @@ fn build(src: &Source, spec: SceneSpec) -> Result<RenderScene, SceneError> {
             problem: "objects: the scene has no object (add an [[objects]] table)".to_string(),
         });
     }
-    let lights = lights(src, &spec, objects.gltf_lights)?;
+    let (lights, light_spectra) = lights(src, &spec, objects.gltf_lights)?;
     let scene = RenderScene {
         name,
         meshes: objects.meshes,
@@ -617,6 +617,7 @@ fn build(src: &Source, spec: SceneSpec) -> Result<RenderScene, SceneError> {
         tonemap,
         background: spec.background,
         motion: objects.motion,
+        light_spectra,
     };
     scene.validate().map_err(|e| match e {
         // At the key's line when it is a top-level key of the file (`spp = 0`), else naming
@@ -678,19 +679,19 @@ fn camera(src: &Source, spec: &SceneSpec) -> Result<Camera, SceneError> {
     Ok(camera)
 }
 
-/// The lights: the glTF files' punctual lights, then the file's.
-fn lights(
-    src: &Source,
-    spec: &SceneSpec,
-    gltf_lights: Vec<Light>,
-) -> Result<Vec<Light>, SceneError> {
+/// The lights: the glTF files' punctual lights, then the file's; and each one's emission
+/// spectrum, if it names one.
+type Lights = (Vec<Light>, Vec<Option<Emission>>);
+fn lights(src: &Source, spec: &SceneSpec, gltf_lights: Vec<Light>) -> Result<Lights, SceneError> {
+    let mut spectra = vec![None; gltf_lights.len()];
     let mut lights = gltf_lights;
     for (k, l) in spec.lights.iter().enumerate() {
         // A setting out of range is the scene file's error, not its file's (even when the
         // light's file was fetched by the set-up).
-        let tint = emission(l.get_ref())
-            .map_err(|e| src.at(l.span(), &format!("lights[{k}]"), e))?
-            .map_or([1.0; 3], |e| e.table().rgb());
+        let spectrum =
+            emission(l.get_ref()).map_err(|e| src.at(l.span(), &format!("lights[{k}]"), e))?;
+        spectra.push(spectrum);
+        let tint = spectrum.map_or([1.0; 3], |e| e.table().rgb());
         let light =
             make_light(src, l.get_ref(), k as u64, tint).map_err(|e| match l.get_ref() {
                 LightSpec::Goniodiagram { file, .. } | LightSpec::Environment { file, .. }
@@ -702,7 +703,7 @@ fn lights(
             })?;
         lights.push(light);
     }
-    Ok(lights)
+    Ok((lights, spectra))
 }
 
 /// A light's emission spectrum, if it names one. In an RGB render the light's colour becomes
@@ -1059,6 +1060,7 @@ fn material(src: &Source, name: &str, m: &Spanned<MaterialSpec>) -> Result<Mater
             out.optics.transmittance = *tint;
             out.optics.ior = index.index_d();
             out.optics.fresnel = true;
+            out.optics.dispersion = Some(index);
             out
         }
         MaterialSpec::Textured {

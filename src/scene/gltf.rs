@@ -88,6 +88,7 @@ pub fn load_gltf(path: &Path) -> Result<RenderScene, SceneError> {
         tonemap: Operator::default(),
         background: [0.0; 3],
         motion: Vec::new(),
+        light_spectra: Vec::new(),
     })
 }
 

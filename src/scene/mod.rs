@@ -56,6 +56,10 @@ pub struct RenderScene {
     pub background: [f32; 3],
     /// Keyframed instance transforms (top level rebuilt per frame).
     pub motion: Vec<InstanceMotion>,
+    /// Per light (in `lights`' order; missing ones name none), the emission spectrum a scene
+    /// file names for it, which spectral renders use (RGB ones use its colour, already in
+    /// the light's intensity).
+    pub light_spectra: Vec<Option<crate::spectrum::illuminant::Emission>>,
 }
 
 impl RenderScene {

@@ -99,6 +99,20 @@ impl Dispersion {
         }
     }
 
+    /// The two-term Cauchy glass of index `n_d` at the d line and Abbe number `abbe`: a
+    /// glass a scene gives by its catalogue figures rather than by coefficients.
+    pub fn cauchy_abbe(n_d: f32, abbe: f32) -> Dispersion {
+        let (n_d, abbe) = (f64::from(n_d), f64::from(abbe));
+        let spread = 1.0 / micron2(f64::from(LAMBDA_F)) - 1.0 / micron2(f64::from(LAMBDA_C));
+        let b = (n_d - 1.0) / (abbe * spread);
+        let a = n_d - b / micron2(f64::from(LAMBDA_D));
+        Dispersion::Cauchy {
+            a: a as f32,
+            b: b as f32,
+            c: 0.0,
+        }
+    }
+
     /// The nominal index `n_d`, at the helium d line ([`LAMBDA_D`]).
     pub fn index_d(&self) -> f32 {
         self.index(LAMBDA_D)
@@ -190,6 +204,16 @@ mod tests {
 
     fn close(got: f32, want: f32, tol: f32) -> bool {
         (got - want).abs() <= tol
+    }
+
+    #[test]
+    fn a_cauchy_glass_from_its_catalogue_figures_has_them() {
+        for (n_d, abbe) in [(1.5, 36.37), (1.52, 64.17), (1.7, 30.0)] {
+            let d = Dispersion::cauchy_abbe(n_d, abbe);
+            assert!(close(d.index_d(), n_d, 1e-6), "{d:?}");
+            assert!(close(d.abbe(), abbe, 1e-3 * abbe), "{d:?}: {}", d.abbe());
+            d.validate().unwrap();
+        }
     }
 
     #[test]

@@ -67,6 +67,8 @@ pub fn hero_xyz(lambdas: [f32; HERO], values: [f32; HERO]) -> [f32; 3] {
 pub struct Bins {
     centres: Vec<f32>,
     weights: Vec<[f32; 3]>,
+    /// The range the bins cover, in nm.
+    range: [f32; 2],
 }
 
 impl Bins {
@@ -75,11 +77,26 @@ impl Bins {
 
     /// `n` bins, 1 to [`Bins::MAX`], else [`SpectrumError::BadBins`].
     pub fn new(n: u32) -> Result<Self, SpectrumError> {
+        Self::over(n, [LAMBDA_MIN, LAMBDA_MAX])
+    }
+
+    /// `n` bins over `range` (nm, a part of [`LAMBDA_MIN`, `LAMBDA_MAX`] with `lo < hi`): a
+    /// narrow band renders one wavelength's image, as the prism's test does.
+    pub fn over(n: u32, range: [f32; 2]) -> Result<Self, SpectrumError> {
         if !(1..=Self::MAX).contains(&n) {
             return Err(SpectrumError::BadBins { bins: n });
         }
+        let [lo, hi] = range;
+        if !(LAMBDA_MIN <= lo && lo < hi && hi <= LAMBDA_MAX) {
+            return Err(SpectrumError::BadCoefficient {
+                what: "the wavelength range of the bins".to_string(),
+                value: if LAMBDA_MIN <= lo { hi } else { lo },
+                expected: "lo < hi within 380-780 nm",
+            });
+        }
         let cumulative = CumulativeObserver::new();
-        let edge = |i: u32| f64::from(LAMBDA_MIN) + f64::from(RANGE) * f64::from(i) / f64::from(n);
+        let width = f64::from(hi) - f64::from(lo);
+        let edge = |i: u32| f64::from(lo) + width * f64::from(i) / f64::from(n);
         let mut centres = Vec::with_capacity(n as usize);
         let mut weights = Vec::with_capacity(n as usize);
         let mut below = cumulative.at(edge(0));
@@ -90,7 +107,11 @@ impl Bins {
             weights.push([0, 1, 2].map(|c| (above[c] - below[c]) as f32));
             below = above;
         }
-        Ok(Self { centres, weights })
+        Ok(Self {
+            centres,
+            weights,
+            range,
+        })
     }
 
     /// The number of bins.
@@ -105,7 +126,12 @@ impl Bins {
 
     /// The width of each bin, in nm.
     pub fn width(&self) -> f32 {
-        RANGE / self.len() as f32
+        (self.range[1] - self.range[0]) / self.len() as f32
+    }
+
+    /// The range the bins cover, in nm.
+    pub fn range(&self) -> [f32; 2] {
+        self.range
     }
 
     /// The bins' centres, in nm.
@@ -137,12 +163,12 @@ impl Bins {
     /// The bin averages of `f` (λ in nm): per bin the mean of `f` at the midpoints of
     /// equal steps of at most 1 nm (a bin narrower than 1 nm takes its centre).
     pub fn tabulate(&self, f: impl Fn(f32) -> f32) -> Vec<f32> {
-        let width = f64::from(RANGE) / self.len() as f64;
+        let width = (f64::from(self.range[1]) - f64::from(self.range[0])) / self.len() as f64;
         let steps = width.ceil() as usize;
         let step = width / steps as f64;
         (0..self.len())
             .map(|i| {
-                let lo = f64::from(LAMBDA_MIN) + width * i as f64;
+                let lo = f64::from(self.range[0]) + width * i as f64;
                 let sum: f64 = (0..steps)
                     .map(|k| f64::from(f((lo + (k as f64 + 0.5) * step) as f32)))
                     .sum();

@@ -386,6 +386,18 @@ const fn collect<const N: usize>(swept: bool) -> [Backend; N] {
     out
 }
 
+/// The set of the swept backends written by hand ([`Backend::hand_written`]).
+const fn hand_written_bits() -> u32 {
+    let (mut bits, mut i) = (0, 0);
+    while i < INFO.len() {
+        if INFO[i].swept && INFO[i].hand_written {
+            bits |= 1 << INFO[i].backend as u32;
+        }
+        i += 1;
+    }
+    bits
+}
+
 /// How many rows of [`INFO`] the traversal tests run on.
 const fn count_tested() -> usize {
     let (mut n, mut i) = (0, 0);
@@ -431,6 +443,10 @@ impl Backend {
     const fn info(self) -> &'static Info {
         &INFO[self as usize]
     }
+
+    /// The set of [`Backend::hand_written`], one backend per width, for a kernel compiled
+    /// only where the width comparison needs it (the renderer's spectral colour).
+    pub const HAND_WRITTEN_BITS: u32 = hand_written_bits();
 
     /// The set of [`Backend::every`], for a kernel's [`Kernel::BACKENDS`].
     pub const WITH_FACTORS: u32 = Backend::bits(&Backend::ALL) | Backend::bits(&Backend::FACTORS);

@@ -141,5 +141,6 @@ pub fn cornell() -> RenderScene {
         accuracy: None,
         background: [0.0; 3],
         motion: Vec::new(),
+        light_spectra: Vec::new(),
     }
 }

@@ -10,6 +10,10 @@ use super::materials::glass;
 use super::shapes::{brick, checker, lathe, marble, quad, superellipsoid, torus, wood};
 use crate::light::{Circular, Light, Rectangular, circular, rectangular};
 use crate::material::Material;
+use crate::spectrum::dispersion::Dispersion;
+
+/// The glasses' Abbe number in spectral renders: F2's.
+const FLINT_ABBE: f32 = 36.37;
 use crate::scene::{Camera, RenderScene, ShadedMesh};
 
 fn textured(name: &str, tex: std::sync::Arc<crate::texture::Texture>, specular: f32) -> Material {
@@ -43,9 +47,14 @@ pub fn glass1() -> RenderScene {
         checker("ring checker", 128, 16, [0.85, 0.7, 0.2], [0.1, 0.1, 0.4]),
         0.4,
     ));
-    let glass_m = b.material(glass("glass", 1.5));
+    // Flint-like dispersion (Abbe number 36, F2's) about the indices RGB renders use, so
+    // that spectral renders show the vases' colour fringes.
+    let mut clear = glass("glass", 1.5);
+    clear.optics.dispersion = Some(Dispersion::cauchy_abbe(1.5, FLINT_ABBE));
+    let glass_m = b.material(clear);
     let mut tinted = glass("green glass", 1.52);
     tinted.optics.transmittance = [0.6, 0.9, 0.65];
+    tinted.optics.dispersion = Some(Dispersion::cauchy_abbe(1.52, FLINT_ABBE));
     let tinted = b.material(tinted);
 
     b.add(quad(

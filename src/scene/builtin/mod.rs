@@ -7,6 +7,7 @@ mod city;
 mod cornell;
 mod glass1;
 mod materials;
+pub mod prism;
 mod room2;
 mod shapes;
 mod spdemo;
@@ -24,11 +25,12 @@ pub use car::car;
 pub use city::city;
 pub use cornell::cornell;
 pub use glass1::glass1;
+pub use prism::prism;
 pub use room2::room2;
 pub use spdemo::spdemo;
 
 /// (name, one-line description) of every built-in scene.
-pub const NAMES: [(&str, &str); 6] = [
+pub const NAMES: [(&str, &str); 7] = [
     (
         "car",
         "stand-in for the paper's Car: tabulated-BDF paint, refractive glass, 4 lights (environment, parallel, spot, goniodiagram), depth 2",
@@ -53,7 +55,16 @@ pub const NAMES: [(&str, &str); 6] = [
         "city",
         "many objects: 5,329 (a 72 x 72 grid of buildings, lamp posts, the ground), each its own mesh, 63,938 triangles, sun and 4 street lamps, depth 1",
     ),
+    (
+        "prism",
+        "a spectrum from white light: a 60-degree F2 flint prism seen against a white slit on a black wall, one parallel light, depth 2 (render with a spectral colour form to see the colours)",
+    ),
 ];
+
+/// Built-in scenes made to show one effect rather than to be timed (`prism` shows its colours
+/// only in a spectral colour form): the experiments that time every built-in scene leave them
+/// out.
+pub const SHOWCASES: [&str; 1] = ["prism"];
 
 /// A row of the paper's Table 4: scene, triangles, lights, depth.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -109,6 +120,7 @@ pub fn by_name(name: &str) -> Option<RenderScene> {
         "room2" => Some(room2()),
         "cornell" => Some(cornell()),
         "city" => Some(city()),
+        "prism" => Some(prism()),
         _ => None,
     }
 }
@@ -170,6 +182,7 @@ impl Builder {
             tonemap: Operator::default(),
             background,
             motion: Vec::new(),
+            light_spectra: Vec::new(),
         }
     }
 }
@@ -196,6 +209,7 @@ pub fn bare_mesh(path: &Path) -> Result<RenderScene, SceneError> {
         accuracy: None,
         background: [0.05; 3],
         motion: Vec::new(),
+        light_spectra: Vec::new(),
     })
 }
 
@@ -289,6 +303,7 @@ mod tests {
             ("room2", 1.0),
             ("cornell", 0.6),
             ("city", 0.6),
+            ("prism", 0.9),
         ] {
             let s = by_name(name).unwrap();
             let accel = coherent_bsp::Bsp::build(&s.accel_scene(), &Default::default()).unwrap();
