@@ -337,8 +337,9 @@ const WIDEST: u32 = Backend::bits(&Backend::ALL);
 beam_tests!(scalar, Backend::Scalar, Backend::Scalar.bit());
 beam_tests!(widest, Backend::widest(), WIDEST);
 
-/// The widest backend is a SIMD one on x86-64 (this crate's tests build every backend).
-#[cfg(target_arch = "x86_64")]
+/// The widest backend is a SIMD one on x86-64 when this crate's tests build every backend
+/// (its `backends` feature; a `--no-default-features` build has scalar alone).
+#[cfg(all(target_arch = "x86_64", feature = "backends"))]
 #[test]
 fn the_widest_backend_has_simd_lanes() {
     eprintln!("widest backend: {}", Backend::widest().name());
