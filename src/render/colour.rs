@@ -738,8 +738,12 @@ impl<L: Lanes> Colour<L> for Spectral<L> {
                         w,
                         mask,
                         true,
+                        #[inline(always)]
                         |_, lane, lambda, white| {
-                            let p = lane.map_or(p, |m| up.lane(l, m));
+                            let p = match lane {
+                                None => p,
+                                Some(m) => up.lane(l, m),
+                            };
                             sigmoid(l, &p, lambda) * white
                         },
                         false,
@@ -803,6 +807,7 @@ impl<L: Lanes> Colour<L> for Spectral<L> {
                             w,
                             mask,
                             false,
+                            #[inline(always)]
                             |i, lane, lambda, _| {
                                 let (p, y) = match lane {
                                     None => (pf, lum),
@@ -824,6 +829,7 @@ impl<L: Lanes> Colour<L> for Spectral<L> {
                             w,
                             mask,
                             true,
+                            #[inline(always)]
                             |_, lane, lambda, white| {
                                 let (p, q) = match lane {
                                     None => (pf, pl),
@@ -859,7 +865,14 @@ impl<L: Lanes> Colour<L> for Spectral<L> {
                     w,
                     l.splat_mask(true),
                     false,
-                    |_, lane, lambda, _| sigmoid(l, &lane.map_or(pf, |m| uf.lane(l, m)), lambda),
+                    #[inline(always)]
+                    |_, lane, lambda, _| {
+                        let p = match lane {
+                            None => pf,
+                            Some(m) => uf.lane(l, m),
+                        };
+                        sigmoid(l, &p, lambda)
+                    },
                     false,
                 );
                 for i in 0..out.v.len() {
@@ -889,12 +902,15 @@ impl<L: Lanes> Colour<L> for Spectral<L> {
     fn max_channel(&self, l: L, t: &Spectra) -> L::F32s {
         if t.layout() == Some(Layout::Wavelengths) {
             let per = t.n.div_ceil(L::N);
-            l.from_fn(|m| {
-                self.v[m * per..(m + 1) * per]
-                    .iter()
-                    .map(|x| x.reduce_max())
-                    .fold(f32::NEG_INFINITY, f32::max)
-            })
+            // Loops, not a closure and iterator adaptors: those stay out of line, outside the
+            // backend's `#[target_feature]` function.
+            let mut most = [f32::NEG_INFINITY; MAX_LANES];
+            for (m, o) in most.iter_mut().enumerate().take(L::N) {
+                for x in &self.v[m * per..(m + 1) * per] {
+                    *o = o.max(x.reduce_max());
+                }
+            }
+            l.load(&most)
         } else {
             let mut m = self.v[0];
             for x in &self.v[1..] {
