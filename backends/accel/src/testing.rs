@@ -73,7 +73,7 @@ impl<A: Accel> Apart<'_, A> {
         )
     }
 
-    /// [`Accel::intersect_all`], each hit as `(lane, hit)`.
+    /// [`Accel::intersect_all`]: the hits of each lane, in the order the walk found them.
     #[inline(always)]
     pub fn intersect_all<L: Lanes>(&self, l: L, rays: &Rays<L>, active: L::Mask) -> Vec<Vec<Hit1>> {
         l.apart(
