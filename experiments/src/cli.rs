@@ -200,18 +200,20 @@ fn run(
         .unwrap_or_else(|_| Err(anyhow::anyhow!("panicked (a bug: please report it)")));
         match result {
             Ok(()) => {
-                eprintln!(
-                    "   {} done in {:.1} s",
-                    experiment.name,
-                    start.elapsed().as_secs_f64()
-                );
+                let seconds = start.elapsed().as_secs_f64();
+                eprintln!("   {} done in {seconds:.1} s", experiment.name);
                 ran.push(experiment.name.to_owned());
                 // Which revision wrote this experiment's results (`runs` in machine.json).
                 let json = std::fs::read_to_string(&machine_json)
                     .with_context(|| format!("cannot read {}", machine_json.display()))?;
                 let probe = crate::machine_keys::speed_probe_ms();
-                let json =
-                    crate::machine_keys::record_run(&json, experiment.name, &ctx.machine, probe);
+                let json = crate::machine_keys::record_run(
+                    &json,
+                    experiment.name,
+                    &ctx.machine,
+                    probe,
+                    seconds,
+                );
                 std::fs::write(&machine_json, json)
                     .with_context(|| format!("cannot write {}", machine_json.display()))?;
             }

@@ -62,6 +62,9 @@ pub struct RunRecord {
     pub os: Option<String>,
     /// [`speed_probe_ms`] on its host; `None` in entries written before it was recorded.
     pub probe_ms: Option<f64>,
+    /// The experiment's wall time in that run (its measurements, plots and set-up, not the
+    /// build); `None` in entries written before it was recorded.
+    pub seconds: Option<f64>,
 }
 
 /// `build`'s value for this machine's build, as JSON text.
@@ -130,9 +133,15 @@ pub fn machine_json(machine: &Machine, previous: Option<&str>) -> String {
 }
 
 /// `json` with `experiment`'s entry of `runs` set to `machine`'s revision, date, CPU model and
-/// `os` and to `probe_ms` ([`speed_probe_ms`]): the run that has just written that
-/// experiment's results.
-pub fn record_run(json: &str, experiment: &str, machine: &Machine, probe_ms: f64) -> String {
+/// `os`, to `probe_ms` ([`speed_probe_ms`]) and to `seconds`, the experiment's wall time: the
+/// run that has just written that experiment's results.
+pub fn record_run(
+    json: &str,
+    experiment: &str,
+    machine: &Machine,
+    probe_ms: f64,
+    seconds: f64,
+) -> String {
     let mut runs: serde_json::Map<String, serde_json::Value> = get_key(json, "runs")
         .and_then(|v| serde_json::from_str(&v).ok())
         .unwrap_or_default();
@@ -144,6 +153,7 @@ pub fn record_run(json: &str, experiment: &str, machine: &Machine, probe_ms: f64
             "cpu": machine.cpu,
             "os": machine.os,
             "probe_ms": (probe_ms * 100.0).round() / 100.0,
+            "seconds": seconds.round(),
         }),
     );
     set_key(json, "runs", &serde_json::Value::Object(runs).to_string())
@@ -193,6 +203,7 @@ pub fn runs(json: &str) -> Vec<RunRecord> {
             cpu: v["cpu"].as_str().map(str::to_owned),
             os: v["os"].as_str().map(str::to_owned),
             probe_ms: v["probe_ms"].as_f64(),
+            seconds: v["seconds"].as_f64(),
         })
         .collect()
 }
@@ -244,34 +255,47 @@ mod tests {
         machine.git_rev = "aaa".into();
         machine.date = "d1".into();
         machine.os = "host a".into();
-        let json = record_run(&machine_json(&machine, None), "kernels", &machine, 25.0);
-        let json = record_run(&json, "table1", &machine, 25.0);
+        let json = record_run(
+            &machine_json(&machine, None),
+            "kernels",
+            &machine,
+            25.0,
+            60.0,
+        );
+        let json = record_run(&json, "table1", &machine, 25.0, 90.0);
         // A later run on the same CPU, of one experiment only, on a slower host.
         let mut later = machine.clone();
         later.git_rev = "bbb".into();
         later.date = "d2".into();
         later.os = "host b".into();
-        let json = record_run(&machine_json(&later, Some(&json)), "table1", &later, 37.504);
-        let want = |n: &str, r: &str, d: &str, cpu: &str, os: &str, ms: f64| RunRecord {
+        let json = record_run(
+            &machine_json(&later, Some(&json)),
+            "table1",
+            &later,
+            37.504,
+            120.4,
+        );
+        let want = |n: &str, r: &str, d: &str, cpu: &str, os: &str, ms: f64, secs: f64| RunRecord {
             experiment: n.to_owned(),
             git_rev: r.to_owned(),
             date: d.to_owned(),
             cpu: Some(cpu.to_owned()),
             os: Some(os.to_owned()),
             probe_ms: Some(ms),
+            seconds: Some(secs),
         };
         let cpu = machine.cpu.as_str();
         assert_eq!(
             runs(&json),
             vec![
-                want("kernels", "aaa", "d1", cpu, "host a", 25.0),
-                want("table1", "bbb", "d2", cpu, "host b", 37.5)
+                want("kernels", "aaa", "d1", cpu, "host a", 25.0, 60.0),
+                want("table1", "bbb", "d2", cpu, "host b", 37.5, 120.0)
             ]
         );
         let parsed: serde_json::Value = serde_json::from_str(&json).unwrap();
         assert_eq!(parsed["runs"]["kernels"]["git_rev"], "aaa");
         assert_eq!(parsed["git_rev"], "bbb");
-        // Entries written before `cpu`, `os` and `probe_ms` were recorded still read.
+        // Entries written before `cpu`, `os`, `probe_ms` and `seconds` were recorded still read.
         let old = r#"{
   "runs": {"kernels":{"date":"d0","git_rev":"ccc"}}
 }"#;
@@ -282,6 +306,7 @@ mod tests {
             cpu: None,
             os: None,
             probe_ms: None,
+            seconds: None,
         };
         assert_eq!(runs(old), vec![old_record.clone()]);
         // A run on another CPU keeps the earlier runs, each with the CPU it ran on, and adds
@@ -289,13 +314,19 @@ mod tests {
         let mut other = later.clone();
         other.cpu = "another CPU".into();
         other.git_rev = "ddd".into();
-        let mixed = record_run(&machine_json(&other, Some(&json)), "table3", &other, 30.0);
+        let mixed = record_run(
+            &machine_json(&other, Some(&json)),
+            "table3",
+            &other,
+            30.0,
+            2400.0,
+        );
         assert_eq!(
             runs(&mixed),
             vec![
-                want("kernels", "aaa", "d1", cpu, "host a", 25.0),
-                want("table1", "bbb", "d2", cpu, "host b", 37.5),
-                want("table3", "ddd", "d2", "another CPU", "host b", 30.0),
+                want("kernels", "aaa", "d1", cpu, "host a", 25.0, 60.0),
+                want("table1", "bbb", "d2", cpu, "host b", 37.5, 120.0),
+                want("table3", "ddd", "d2", "another CPU", "host b", 30.0, 2400.0),
             ]
         );
         // Entries from before the CPU model was recorded get the earlier file's own CPU: they

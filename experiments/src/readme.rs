@@ -185,6 +185,8 @@ fn machine_section(ctx: &Ctx, problems: &mut Vec<String>) -> String {
                     r.cpu.unwrap_or_else(unknown),
                     r.os.unwrap_or_else(unknown),
                     r.probe_ms.map_or_else(unknown, |ms| format!("{ms:.1}")),
+                    r.seconds
+                        .map_or_else(unknown, |s| format!("{:.1}", s / 60.0)),
                 ]
             })
             .collect();
@@ -197,9 +199,18 @@ fn machine_section(ctx: &Ctx, problems: &mut Vec<String>) -> String {
              scalar loop timed when the experiment finished (median of 5), and the `os` line's \
              kernel build tells hosts apart. Ratios within an experiment (speedups, BSP / \
              Embree) come from one run; absolute times of two experiments compare only where \
-             their probes agree.\n\n{}\n",
+             their probes agree. `minutes` is the experiment's wall time in that run (its \
+             measurements and plots; not the build).\n\n{}\n",
             markdown_table(
-                &["experiment", "git_rev", "date", "cpu", "os", "probe_ms"],
+                &[
+                    "experiment",
+                    "git_rev",
+                    "date",
+                    "cpu",
+                    "os",
+                    "probe_ms",
+                    "minutes"
+                ],
                 &rows
             )
         ));
@@ -364,7 +375,7 @@ mod tests {
         // The section names the run behind it once one is recorded.
         assert!(!md.contains(" Run: `"), "{md}");
         let json = std::fs::read_to_string(ctx.path("machine.json")).unwrap();
-        let json = crate::machine_keys::record_run(&json, "demo", &ctx.machine, 1.0);
+        let json = crate::machine_keys::record_run(&json, "demo", &ctx.machine, 1.0, 2.0);
         std::fs::write(ctx.path("machine.json"), json).unwrap();
         let (md, _) = render(&ctx, &registry, &info);
         let rev = ctx.machine.git_rev.trim_end_matches("-dirty");
