@@ -62,8 +62,8 @@ pub struct RunRecord {
     pub os: Option<String>,
     /// [`speed_probe_ms`] on its host; `None` in entries written before it was recorded.
     pub probe_ms: Option<f64>,
-    /// The experiment's wall time in that run (its measurements, plots and set-up, not the
-    /// build); `None` in entries written before it was recorded.
+    /// The experiment's wall time in that run (its measurements and plots, not the build);
+    /// `None` in entries written before it was recorded.
     pub seconds: Option<f64>,
 }
 

@@ -56,8 +56,9 @@ pub(super) fn run(
     backend: Backend,
 ) -> anyhow::Result<()> {
     let size = ctx.pick((32, 24), (128, 96));
-    // Up to 256 samples per pixel: hero's wavelength noise falls as 1 / spp like the rest,
-    // and the agreement target holds after convergence; the reference has 4x the most.
+    // Up to 256 samples per pixel: the agreement target is for converged images, and hero's
+    // wavelength noise takes many more samples to fall than RGB's; the reference has 4x the
+    // most.
     let levels: Vec<u32> = ctx.pick(vec![1, 2], vec![1, 4, 16, 64, 256]);
     let reference_spp = ctx.pick(4, 1024);
     run_with(ctx, scenes, backend, size, &levels, reference_spp)
