@@ -382,6 +382,23 @@ impl Light {
         }
     }
 
+    /// The colour every sample of this light is a multiple of (its radiance or intensity
+    /// times one number per lane: distance, angle, goniodiagram), or `None` when its colour
+    /// varies (an environment map).
+    pub fn colour(&self) -> Option<[f32; 3]> {
+        match self {
+            Light::Omni(x) => Some(x.intensity()),
+            Light::Spot(x) => Some(x.intensity()),
+            Light::Parallel(x) => Some(x.irradiance()),
+            Light::Direct(x) => Some(x.intensity()),
+            Light::Linear(x) => Some(x.intensity()),
+            Light::Circular(x) => Some(x.radiance()),
+            Light::Rectangular(x) => Some(x.radiance()),
+            Light::Goniodiagram(x) => Some(x.scale()),
+            Light::Environment(_) => None,
+        }
+    }
+
     /// What a ray in direction `dir` (unit) that misses everything sees of this light: the
     /// environment map's radiance, zero for the other kinds.
     #[inline(always)]
@@ -539,6 +556,58 @@ mod tests {
         };
         let rays = shadow_rays(l, &Vec3s::splat(l, p), &Vec3s::splat(l, Vec3::Y), &s);
         accel.occluded(l, &rays, l.splat_mask(true)).any()
+    }
+
+    /// Every sample of a light whose colour is one throughout is that colour times a number
+    /// (what the spectral forms rely on to upsample the colour once): each light of the
+    /// paper's four scenes, which use every kind, from points on their surfaces.
+    #[test]
+    fn samples_are_multiples_of_the_lights_colour() {
+        let l = Scalar;
+        let y = |c: [f32; 3]| c[0] * 0.2126 + c[1] * 0.7152 + c[2] * 0.0722;
+        let mut lit = std::collections::BTreeMap::new();
+        for name in ["car", "spdemo", "glass1", "room2"] {
+            let scene = crate::scene::builtin::by_name(name).unwrap();
+            let points: Vec<Vec3> = scene
+                .meshes
+                .iter()
+                .flat_map(|m| m.mesh.positions.iter().step_by(97).copied())
+                .collect();
+            for light in &scene.lights {
+                let Some(c) = light.colour() else {
+                    assert_eq!(light.kind(), LightKind::Environment);
+                    continue;
+                };
+                for (j, p) in points.iter().enumerate() {
+                    let n = [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z][j % 6];
+                    let u = [0.37 * (j % 7) as f32 / 7.0, (j % 11) as f32 / 11.0];
+                    let s = light.sample(l, &Vec3s::splat(l, *p), &Vec3s::splat(l, n), true, 0, u);
+                    if !s.active || y([s.li.r, s.li.g, s.li.b]) <= 0.0 {
+                        continue;
+                    }
+                    let k = y([s.li.r, s.li.g, s.li.b]) / y(c);
+                    for (got, want) in [s.li.r, s.li.g, s.li.b].into_iter().zip(c) {
+                        assert!(
+                            (got - want * k).abs() <= 1e-5 * got.abs().max(want * k),
+                            "{name} {:?}: {:?} is not a multiple of {c:?}",
+                            light.kind(),
+                            s.li
+                        );
+                    }
+                    *lit.entry(light.kind()).or_insert(0) += 1;
+                }
+            }
+        }
+        let kinds: Vec<LightKind> = LightKind::ALL
+            .into_iter()
+            .filter(|k| *k != LightKind::Environment)
+            .collect();
+        for k in kinds {
+            assert!(
+                lit.get(&k).is_some_and(|n| *n > 0),
+                "no lit sample of {k:?}"
+            );
+        }
     }
 
     /// A shading point on the seam, found a rounding error behind the wall's plane (as a

@@ -11,7 +11,8 @@
 //! sigmoid model, `crate::spectrum::upsample`): reflectances and weights as spectra of any
 //! magnitude (`upsample::emitter`'s shape and scale), radiances the same times the display's
 //! white (D65). A light that names its spectrum (`spectrum` or `temperature` in a scene
-//! file) emits that spectrum at its sample's luminance instead. The film stays RGB: each
+//! file) emits that spectrum at its sample's luminance instead, and so does a light of one
+//! colour throughout, its colour upsampled once before rendering. The film stays RGB: each
 //! sample's spectrum is integrated against the CIE 1931 observer to XYZ, then to linear sRGB.
 //!
 //! Dispersion is where spectra differ from RGB: a dispersive glass bends each wavelength its
@@ -26,7 +27,7 @@ use crate::scene::RenderScene;
 use crate::spectrum::dispersion::{Dispersion, LAMBDA_D};
 use crate::spectrum::illuminant::{Emission, EmissionTable, white};
 use crate::spectrum::sampling::{Bins, HERO, hero_lanes, hero_xyz};
-use crate::spectrum::upsample::emitter;
+use crate::spectrum::upsample::{Sigmoid, emitter, emitter_lanes};
 use crate::spectrum::{LAMBDA_MAX, LAMBDA_MIN, SpectrumError, cie};
 
 /// The backends the spectral colour forms are compiled for: scalar, and with the
@@ -228,13 +229,25 @@ impl ColourForm {
 /// A light's emission spectrum, at a luminance of 1.
 #[derive(Debug, Clone)]
 struct LightSpectrum {
-    table: EmissionTable,
+    /// Its value at a wavelength (hero).
+    shape: LightShape,
     /// Per bin (bins only; padded with zeros).
     bins: Vec<f32>,
 }
 
+/// What a light's spectrum is made of.
+#[derive(Debug, Clone)]
+enum LightShape {
+    /// The spectrum the light names.
+    Named(EmissionTable),
+    /// The light's RGB colour upsampled once, before rendering: `factor · shape(λ) ·
+    /// white(λ)`. Every sample of the light is that colour times a number, so the
+    /// upsampling of each sample's radiance comes to this times the sample's luminance.
+    Rgb { shape: Sigmoid, factor: f32 },
+}
+
 /// What a spectral form needs besides its values: the bins' wavelengths and observer
-/// weights, the display's white and each named light spectrum per bin, each material's
+/// weights, the display's white and each light's spectrum per bin, each material's
 /// dispersion.
 #[derive(Debug, Clone)]
 pub struct Spectra {
@@ -247,7 +260,7 @@ pub struct Spectra {
     weights: [Vec<f32>; 3],
     /// Bins: the display's white averaged over each bin, padded with zeros.
     white: Vec<f32>,
-    /// Per scene light: its spectrum, when it names one.
+    /// Per scene light: its spectrum, when it names one or its colour is one throughout.
     lights: Vec<Option<LightSpectrum>>,
     /// Per material: its index when it disperses (lane table `dispersive`: 1 when it does).
     dispersion: Vec<Option<Dispersion>>,
@@ -270,17 +283,19 @@ pub enum ColourError {
 impl Spectra {
     /// The tables of `form` (spectral) for `scene`; `None` for RGB.
     pub fn new(form: ColourForm, scene: &RenderScene) -> Result<Option<Spectra>, SpectrumError> {
-        Self::with(form, &scene.light_spectra, &scene.materials)
+        let colours: Vec<Option<[f32; 3]>> = scene.lights.iter().map(|l| l.colour()).collect();
+        Self::with(form, &scene.light_spectra, &colours, &scene.materials)
     }
 
     /// The tables of `form` with no light spectra and no dispersion (the kernels' timings).
     pub fn plain(form: ColourForm) -> Result<Option<Spectra>, SpectrumError> {
-        Self::with(form, &[], &[])
+        Self::with(form, &[], &[], &[])
     }
 
     fn with(
         form: ColourForm,
         light_spectra: &[Option<Emission>],
+        light_colours: &[Option<[f32; 3]>],
         materials: &[crate::material::Material],
     ) -> Result<Option<Spectra>, SpectrumError> {
         let bins = match form {
@@ -310,16 +325,36 @@ impl Spectra {
                 )
             }
         };
-        let lights = light_spectra
-            .iter()
-            .map(|e: &Option<Emission>| {
-                e.map(|e| {
-                    let table = e.table();
-                    let bins = bins
-                        .as_ref()
-                        .map_or_else(Vec::new, |b| padded(b.tabulate(|l| table.eval(l)), 0.0));
-                    LightSpectrum { table, bins }
-                })
+        let named = |e: Emission| {
+            let table = e.table();
+            let bins = bins
+                .as_ref()
+                .map_or_else(Vec::new, |b| padded(b.tabulate(|l| table.eval(l)), 0.0));
+            LightSpectrum {
+                shape: LightShape::Named(table),
+                bins,
+            }
+        };
+        let upsampled = |c: [f32; 3]| {
+            let y = c[0] * 0.2126 + c[1] * 0.7152 + c[2] * 0.0722;
+            if !(y > 0.0 && y.is_finite()) {
+                return None;
+            }
+            let e = emitter(c);
+            let (shape, factor) = (e.shape(), e.scale() / y);
+            let bins = bins.as_ref().map_or_else(Vec::new, |b| {
+                let v = b.centres().iter().zip(&white_bins);
+                padded(v.map(|(&l, w)| shape.eval(l) * factor * w).collect(), 0.0)
+            });
+            Some(LightSpectrum {
+                shape: LightShape::Rgb { shape, factor },
+                bins,
+            })
+        };
+        let lights = (0..light_spectra.len().max(light_colours.len()))
+            .map(|k| match light_spectra.get(k).copied().flatten() {
+                Some(e) => Some(named(e)),
+                None => light_colours.get(k).copied().flatten().and_then(upsampled),
             })
             .collect();
         let dispersion: Vec<Option<Dispersion>> = materials
@@ -543,58 +578,40 @@ impl<L: Lanes> Clone for Spectral<L> {
     }
 }
 
-/// Per lane, an RGB value upsampled: `scale · s(c0 λ² + c1 λ + c2)`.
-struct Upsampled {
-    c: [[f32; MAX_LANES]; 3],
-    scale: [f32; MAX_LANES],
+/// Per lane, an RGB value upsampled: `scale · s(c0 λ² + c1 λ + c2)`, as registers (lanes over
+/// rays) and per lane (lanes over wavelengths).
+struct Upsampled<L: Lanes> {
+    p: [L::F32s; 4],
+    per_lane: [[f32; MAX_LANES]; 4],
 }
 
-impl Upsampled {
-    /// The lanes of `mask` of `rgb` (the rest zero), through `upsample::emitter`: any
+impl<L: Lanes> Upsampled<L> {
+    /// The lanes of `mask` of `rgb` (the rest zero), through `upsample::emitter_lanes`: any
     /// magnitude, a grey exactly constant.
     #[inline(always)]
-    fn of<L: Lanes>(rgb: &Rgbs<L>, mask: L::Mask) -> Upsampled {
-        let mut ch = [[0.0f32; MAX_LANES]; 3];
-        rgb.r.store(&mut ch[0]);
-        rgb.g.store(&mut ch[1]);
-        rgb.b.store(&mut ch[2]);
-        let mut out = Upsampled {
-            c: [[0.0; MAX_LANES]; 3],
-            scale: [0.0; MAX_LANES],
-        };
-        let mut bits = mask.bitmask();
-        while bits != 0 {
-            let m = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            let e = emitter([ch[0][m], ch[1][m], ch[2][m]]);
-            let c = e.shape().coefficients();
-            for (k, ck) in c.iter().enumerate() {
-                out.c[k][m] = *ck;
-            }
-            out.scale[m] = e.scale();
+    fn of(l: L, rgb: &Rgbs<L>, mask: L::Mask) -> Self {
+        let p = emitter_lanes(l, [rgb.r, rgb.g, rgb.b], mask);
+        let mut per_lane = [[0.0f32; MAX_LANES]; 4];
+        for (x, o) in p.iter().zip(&mut per_lane) {
+            x.store(o);
         }
-        out
+        Upsampled { p, per_lane }
     }
 
     /// The coefficients and scale as registers (lanes over rays).
     #[inline(always)]
-    fn lanes<L: Lanes>(&self, l: L) -> [L::F32s; 4] {
-        [
-            l.load(&self.c[0]),
-            l.load(&self.c[1]),
-            l.load(&self.c[2]),
-            l.load(&self.scale),
-        ]
+    fn lanes(&self) -> [L::F32s; 4] {
+        self.p
     }
 
     /// Lane `m`'s coefficients and scale in every lane (lanes over wavelengths).
     #[inline(always)]
-    fn lane<L: Lanes>(&self, l: L, m: usize) -> [L::F32s; 4] {
+    fn lane(&self, l: L, m: usize) -> [L::F32s; 4] {
         [
-            l.splat(self.c[0][m]),
-            l.splat(self.c[1][m]),
-            l.splat(self.c[2][m]),
-            l.splat(self.scale[m]),
+            l.splat(self.per_lane[0][m]),
+            l.splat(self.per_lane[1][m]),
+            l.splat(self.per_lane[2][m]),
+            l.splat(self.per_lane[3][m]),
         ]
     }
 }
@@ -682,7 +699,7 @@ impl<L: Lanes> Spectral<L> {
     }
 
     /// A light's spectrum per register (`i`: the hero channel, the bin, or the register of
-    /// bins for lanes over wavelengths).
+    /// bins for lanes over wavelengths; `white`: the display's white at `lambda`, for hero).
     #[inline(always)]
     fn light_values(
         l: L,
@@ -691,9 +708,13 @@ impl<L: Lanes> Spectral<L> {
         i: usize,
         lane: Option<usize>,
         lambda: L::F32s,
+        white: L::F32s,
     ) -> L::F32s {
         match (t.layout(), lane) {
-            (None, _) => s.table.eval_lanes(l, lambda),
+            (None, _) => match &s.shape {
+                LightShape::Named(table) => table.eval_lanes(l, lambda),
+                LightShape::Rgb { shape, factor } => shape.eval_lanes(l, lambda) * *factor * white,
+            },
             (Some(Layout::Rays), _) => l.splat(s.bins[i]),
             (_, _) => l.load(&s.bins[i * L::N..(i + 1) * L::N]),
         }
@@ -730,8 +751,8 @@ impl<L: Lanes> Colour<L> for Spectral<L> {
             move |l| {
                 let mut out = Self::zero(l, t);
                 if mask.any() {
-                    let up = Upsampled::of(&e, mask);
-                    let p = up.lanes(l);
+                    let up = Upsampled::of(l, &e, mask);
+                    let p = up.lanes();
                     out.each(
                         l,
                         t,
@@ -793,36 +814,37 @@ impl<L: Lanes> Colour<L> for Spectral<L> {
                 if mask.none() {
                     return;
                 }
-                let uf = Upsampled::of(&f, mask);
-                let pf = uf.lanes(l);
+                let uf = Upsampled::of(l, &f, mask);
+                let pf = uf.lanes();
                 match light.and_then(|k| t.lights.get(k)).and_then(Option::as_ref) {
                     Some(s) => {
-                        // The light's own spectrum at the sample's luminance.
+                        // The light's spectrum at the sample's luminance.
                         let lum = li.luminance();
                         let mut lums = [0.0f32; MAX_LANES];
                         lum.store(&mut lums);
+                        let with_white = matches!(s.shape, LightShape::Rgb { .. });
                         self.each(
                             l,
                             t,
                             w,
                             mask,
-                            false,
+                            with_white,
                             #[inline(always)]
-                            |i, lane, lambda, _| {
+                            |i, lane, lambda, white| {
                                 let (p, y) = match lane {
                                     None => (pf, lum),
                                     Some(m) => (uf.lane(l, m), l.splat(lums[m])),
                                 };
                                 sigmoid(l, &p, lambda)
-                                    * Self::light_values(l, t, s, i, lane, lambda)
+                                    * Self::light_values(l, t, s, i, lane, lambda, white)
                                     * y
                             },
                             true,
                         );
                     }
                     None => {
-                        let ul = Upsampled::of(&li, mask);
-                        let pl = ul.lanes(l);
+                        let ul = Upsampled::of(l, &li, mask);
+                        let pl = ul.lanes();
                         self.each(
                             l,
                             t,
@@ -856,8 +878,8 @@ impl<L: Lanes> Colour<L> for Spectral<L> {
             #[inline(always)]
             move |l| {
                 let mut out = self.clone();
-                let uf = Upsampled::of(&f, l.splat_mask(true));
-                let pf = uf.lanes(l);
+                let uf = Upsampled::of(l, &f, l.splat_mask(true));
+                let pf = uf.lanes();
                 let mut k = Self::zero(l, t);
                 k.each(
                     l,

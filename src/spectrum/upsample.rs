@@ -10,7 +10,8 @@
 
 use std::sync::LazyLock;
 
-use coherent_simd::{Lanes, SimdF32};
+use coherent_simd::scalar::Scalar;
+use coherent_simd::{Lanes, SimdF32, SimdI32, SimdMask};
 use rgb2spec::RGB2Spec;
 
 /// The table as the build script wrote it (`RGB2Spec::to_writer`'s format: `SPEC`, the
@@ -142,25 +143,131 @@ impl Emitter {
 }
 
 /// The spectrum of the linear sRGB emission `rgb` (pbrt-v4's `RGBIlluminantSpectrum`): with
-/// `m` the brightest channel, `scale = 2m` and `shape = reflectance(rgb / 2m)`. The shape
-/// depends on the colour's chromaticity, not its magnitude, and halving keeps it off the
-/// sigmoid's saturated end, where the table's spectra are box-like; a grey light is a
-/// constant `m`. Black gives zero. Negative and NaN channels count as 0, and channels are
-/// capped at `f32::MAX / 2` (so that the scale is finite).
+/// `m` the brightest channel, `scale = 2m` and a shape of brightest channel 1/2: the table's
+/// interpolation at `rgb / 2m` ([`emitter_lanes`], one lane). The shape depends on the
+/// colour's chromaticity, not its magnitude, and halving keeps it off the sigmoid's saturated
+/// end, where the table's spectra are box-like; a grey light is a constant `m`. Black gives
+/// zero. Negative and NaN channels count as 0, and channels are capped at `f32::MAX / 2` (so
+/// that the scale is finite).
 pub fn emitter(rgb: [f32; 3]) -> Emitter {
-    let rgb = rgb.map(|v| if v > 0.0 { v.min(f32::MAX / 2.0) } else { 0.0 });
-    let m = rgb[0].max(rgb[1]).max(rgb[2]);
-    if m == 0.0 {
-        return Emitter {
-            scale: 0.0,
-            shape: Sigmoid::constant(0.0),
-        };
-    }
-    let scale = 2.0 * m;
+    let l = Scalar;
+    let [c0, c1, c2, scale] = emitter_lanes(l, rgb, l.splat_mask(true));
     Emitter {
         scale,
-        shape: reflectance(rgb.map(|v| v / scale)),
+        shape: Sigmoid::from_coefficients([c0, c1, c2]),
     }
+}
+
+/// The table where every emitter's shape lies: brightness 1/2 (an emitter's colour over
+/// twice its brightest channel has that channel at exactly 1/2). The two brightness slices
+/// around 1/2 are blended once, here, so that a lookup is a bilinear interpolation of four
+/// nodes instead of `RGB2Spec::fetch`'s trilinear one of eight after a search of the
+/// brightness axis: in exact arithmetic the same coefficients (the interpolation is linear
+/// in each axis), in `f32` within rounding of them ([`HALF_SHAPE_ERROR`]).
+struct HalfSlice {
+    /// Entries per axis.
+    res: i32,
+    /// A channel's coordinate on the slice's axes per unit of the channel: `(res - 1) / 0.5`.
+    to_grid: f32,
+    /// Per coefficient, the node `(i * res + y) * res + x` of the table whose brightest channel
+    /// is `i` (`x` and `y`: the next two channels after it, cyclically).
+    planes: [Vec<f32>; 3],
+}
+
+/// [`HalfSlice`] from [`TABLE_BYTES`] on first use.
+static HALF: LazyLock<HalfSlice> = LazyLock::new(|| {
+    let words: Vec<f32> = TABLE_BYTES[8..]
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    let res = table_resolution() as usize;
+    let (nodes, data) = words.split_at(res);
+    // `RGB2Spec::fetch`'s interval and weight along the brightness axis, at 1/2.
+    let z = (0..res - 1).rfind(|&k| nodes[k] <= 0.5).unwrap_or(0);
+    let z1 = (0.5 - nodes[z]) / (nodes[z + 1] - nodes[z]);
+    let z0 = 1.0 - z1;
+    let at = |i: usize, z: usize, y: usize, x: usize, k: usize| {
+        data[(((i * res + z) * res + y) * res + x) * 3 + k]
+    };
+    let planes = std::array::from_fn(|k| {
+        let mut plane = Vec::with_capacity(3 * res * res);
+        for i in 0..3 {
+            for y in 0..res {
+                for x in 0..res {
+                    plane.push(at(i, z, y, x, k) * z0 + at(i, z + 1, y, x, k) * z1);
+                }
+            }
+        }
+        plane
+    });
+    HalfSlice {
+        res: res as i32,
+        to_grid: (res - 1) as f32 / 0.5,
+        planes,
+    }
+});
+
+/// The largest difference between an emitter's shape and the reflectance `RGB2Spec::fetch`
+/// gives its colour over twice its brightest channel, at any wavelength: the rounding of the
+/// interpolations done in another order. The quadratic's terms in nm are up to hundreds of
+/// times its value, so a coefficient's last bit moves the spectrum by up to 3.1e-5 (the
+/// largest over 300,000 random colours at every 5 nm).
+pub const HALF_SHAPE_ERROR: f32 = 1e-4;
+
+/// [`emitter`] per lane for the lanes of `mask`: `[c0, c1, c2, scale]`, zero in the other
+/// lanes. Gathers from one table instead of a lookup lane by lane, with the same operations
+/// on every backend (no fused multiply-adds), so that every backend and [`emitter`] give the
+/// same bits.
+#[inline(always)]
+pub fn emitter_lanes<L: Lanes>(l: L, rgb: [L::F32s; 3], mask: L::Mask) -> [L::F32s; 4] {
+    let t = &*HALF;
+    let zero = l.splat(0.0);
+    let cap = l.splat(f32::MAX / 2.0);
+    let [r, g, b] = rgb.map(|v| v.gt(zero).select(v.min(cap), zero));
+    let m = r.max(g).max(b);
+    let lit = mask & m.gt(zero);
+    let scale = lit.select(m * 2.0, zero);
+    // Black lanes divide by one instead of zero: their values are replaced below.
+    let div = lit.select(scale, l.splat(1.0));
+    let [r, g, b] = [r / div, g / div, b / div];
+    let grey = r.eq(g) & g.eq(b);
+    // The brightest channel `i` (the last of equals, as `RGB2Spec::fetch` picks it) and the
+    // two after it, cyclically.
+    let one = l.splat_i32(1);
+    let g_top = g.ge(r);
+    let (mut x, mut y, mut i) = (
+        g_top.select(b, g),
+        g_top.select(r, b),
+        g_top.select_i32(one, l.splat_i32(0)),
+    );
+    let b_top = b.ge(g_top.select(g, r));
+    x = b_top.select(r, x);
+    y = b_top.select(g, y);
+    i = b_top.select_i32(l.splat_i32(2), i);
+    let res = l.splat_i32(t.res);
+    let last = l.splat_i32(t.res - 2);
+    let (x, y) = (x * t.to_grid, y * t.to_grid);
+    let (xi, yi) = (x.to_i32().min(last), y.to_i32().min(last));
+    let (x1, y1) = (x - xi.to_f32(), y - yi.to_f32());
+    let (x0, y0) = (l.splat(1.0) - x1, l.splat(1.0) - y1);
+    let look = lit.and_not(grey);
+    let idx = look.select_i32((i * res + yi) * res + xi, l.splat_i32(0));
+    let next = idx + res;
+    let c = std::array::from_fn::<_, 3, _>(|k| {
+        let plane = &t.planes[k];
+        let (p00, p10) = l.gather2_near(plane, idx);
+        let (p01, p11) = l.gather2_near(plane, next);
+        let v = (p00 * x0 + p10 * x1) * y0 + (p01 * x0 + p11 * x1) * y1;
+        // A grey is the constant 1/2 (all zero); black the constant 0.
+        let black = mask.and_not(lit);
+        let v = look.select(v, zero);
+        if k == 2 {
+            black.select(l.splat(-SATURATED), v)
+        } else {
+            v
+        }
+    });
+    [c[0], c[1], c[2], scale]
 }
 
 /// The RGB a reflectance gives back once upsampled, lit by the display's white and seen by
@@ -250,11 +357,106 @@ mod tests {
         }
         let e = emitter([40.0, 10.0, 2.0]);
         assert_eq!(e.scale(), 80.0);
-        assert_eq!(e.shape(), reflectance([0.5, 0.125, 0.025]));
+        let want = reflectance([0.5, 0.125, 0.025]);
         for lambda in every_nm() {
             assert_eq!(e.eval(lambda), 80.0 * e.shape().eval(lambda));
+            let d = (e.shape().eval(lambda) - want.eval(lambda)).abs();
+            assert!(d <= HALF_SHAPE_ERROR, "{lambda} nm: {d:e}");
         }
         assert!(emitter([f32::INFINITY, 0.0, 0.0]).scale().is_finite());
+    }
+
+    /// The blended slice against `RGB2Spec::fetch`'s trilinear lookup, over colours of every
+    /// brightest channel and on the slice's edges.
+    #[test]
+    fn emitter_shapes_are_the_tables_within_rounding() {
+        let mut rng = StdRng::seed_from_u64(13);
+        let edges = (0..27).map(|k| [k % 3, k / 3 % 3, k / 9].map(|i| i as f32 / 2.0));
+        let random = (0..3000).map(|_| [rng.random(), rng.random(), rng.random()]);
+        let mut worst = 0.0f32;
+        for rgb in edges.chain(random) {
+            let m: f32 = rgb[0].max(rgb[1]).max(rgb[2]);
+            if m == 0.0 {
+                continue;
+            }
+            let e = emitter(rgb);
+            let want = reflectance(rgb.map(|v| v / (2.0 * m)));
+            for lambda in every_nm().step_by(5) {
+                let d = (e.shape().eval(lambda) - want.eval(lambda)).abs();
+                assert!(d <= HALF_SHAPE_ERROR, "{rgb:?} at {lambda} nm: {d:e}");
+                worst = worst.max(d);
+            }
+        }
+        eprintln!("largest difference from the trilinear lookup: {worst:e}");
+    }
+
+    /// `emitter_lanes` per lane, with some lanes masked off (zero there).
+    #[derive(Clone)]
+    struct Upsample<'a> {
+        colours: &'a [[f32; 3]],
+    }
+
+    impl Kernel for Upsample<'_> {
+        type Output = Vec<[f32; 4]>;
+
+        #[inline(always)]
+        fn run<L: Lanes>(self, l: L) -> Vec<[f32; 4]> {
+            let mut out = Vec::new();
+            for (k, chunk) in self.colours.chunks(L::N).enumerate() {
+                let rgb =
+                    std::array::from_fn(|c| l.from_fn(|i| chunk.get(i).map_or(1.0, |v| v[c])));
+                // Every third lane off, shifting with the chunk.
+                let mask = l.mask_from_bits(!(0x9249_2492u32 >> (k % 3)));
+                let p = emitter_lanes(l, rgb, mask);
+                let mut v = [[0.0f32; MAX_LANES]; 4];
+                for (x, o) in p.iter().zip(&mut v) {
+                    x.store(o);
+                }
+                out.extend((0..chunk.len()).map(|i| std::array::from_fn(|j| v[j][i])));
+            }
+            out
+        }
+    }
+
+    #[test]
+    fn emitter_lanes_is_emitter_on_every_backend() {
+        let mut rng = StdRng::seed_from_u64(17);
+        let mut colours: Vec<[f32; 3]> = vec![
+            [0.0; 3],
+            [1.0; 3],
+            [3.0; 3],
+            [-1.0, f32::NAN, 0.0],
+            [f32::INFINITY, 0.0, 0.0],
+            [1.0, 1.0, 0.5],
+            [0.5, 1.0, 1.0],
+            [1.0, 0.5, 1.0],
+            [1e-40, 0.0, 0.0],
+        ];
+        colours.extend((0..500).map(|_| {
+            let m: f32 = rng.random_range(0.001..1000.0);
+            [rng.random(), rng.random(), rng.random()].map(|v: f32| v * m)
+        }));
+        let kernel = Upsample { colours: &colours };
+        for b in Backend::usable() {
+            let got = b.run(kernel.clone()).expect("usable backend");
+            assert_eq!(got.len(), colours.len());
+            for (n, (rgb, got)) in colours.iter().zip(&got).enumerate() {
+                let chunk = n / b.lanes();
+                let on = !(0x9249_2492u32 >> (chunk % 3)) >> (n % b.lanes()) & 1 == 1;
+                let want = if on {
+                    let e = emitter(*rgb);
+                    let c = e.shape().coefficients();
+                    [c[0], c[1], c[2], e.scale()]
+                } else {
+                    [0.0; 4]
+                };
+                assert_eq!(
+                    got.map(f32::to_bits),
+                    want.map(f32::to_bits),
+                    "{b} {rgb:?}: {got:?} {want:?}"
+                );
+            }
+        }
     }
 
     /// The values of `rgb2spec`'s own evaluation, and of the table's lookup.

@@ -360,8 +360,9 @@ fn layouts_md(t: &Table, k: Option<&Table>) -> anyhow::Result<String> {
          over the scenes) differs most between the layouts. Over rays, each lane is a ray \
          and a bin is one register: the work per ray is N registers whatever the width, and \
          the upsampling's per-lane coefficients load once. Over wavelengths, one ray's N \
-         bins fill N / lanes registers, so the same N values take fewer instructions as the \
-         packet widens, but each lane's coefficients are splat lane by lane.\n\n"
+         bins fill N / lanes registers: fewer instructions per ray as the packet widens, \
+         but the same N registers per packet, and each lane's coefficients are splat lane \
+         by lane.\n\n"
     ));
     md.push_str(&markdown_table(
         &[
