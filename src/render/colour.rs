@@ -592,8 +592,11 @@ impl<L: Lanes> Upsampled<L> {
     fn of(l: L, rgb: &Rgbs<L>, mask: L::Mask) -> Self {
         let p = emitter_lanes(l, [rgb.r, rgb.g, rgb.b], mask);
         let mut per_lane = [[0.0f32; MAX_LANES]; 4];
-        for (x, o) in p.iter().zip(&mut per_lane) {
-            x.store(o);
+        // An index loop, not an iterator adaptor, which may stay out of line (outside the
+        // backend's `#[target_feature]` function).
+        #[allow(clippy::needless_range_loop)]
+        for k in 0..4 {
+            p[k].store(&mut per_lane[k]);
         }
         Upsampled { p, per_lane }
     }

@@ -217,33 +217,33 @@ pub const HALF_SHAPE_ERROR: f32 = 1e-4;
 /// [`emitter`] per lane for the lanes of `mask`: `[c0, c1, c2, scale]`, zero in the other
 /// lanes. Gathers from one table instead of a lookup lane by lane, with the same operations
 /// on every backend (no fused multiply-adds), so that every backend and [`emitter`] give the
-/// same bits.
+/// same bits. Written out, without closures or array adaptors: it must inline into the
+/// backends' entry points, or each vector operation becomes a call.
 #[inline(always)]
 pub fn emitter_lanes<L: Lanes>(l: L, rgb: [L::F32s; 3], mask: L::Mask) -> [L::F32s; 4] {
     let t = &*HALF;
     let zero = l.splat(0.0);
     let cap = l.splat(f32::MAX / 2.0);
-    let [r, g, b] = rgb.map(|v| v.gt(zero).select(v.min(cap), zero));
+    let r = rgb[0].gt(zero).select(rgb[0].min(cap), zero);
+    let g = rgb[1].gt(zero).select(rgb[1].min(cap), zero);
+    let b = rgb[2].gt(zero).select(rgb[2].min(cap), zero);
     let m = r.max(g).max(b);
     let lit = mask & m.gt(zero);
     let scale = lit.select(m * 2.0, zero);
     // Black lanes divide by one instead of zero: their values are replaced below.
     let div = lit.select(scale, l.splat(1.0));
-    let [r, g, b] = [r / div, g / div, b / div];
+    let (r, g, b) = (r / div, g / div, b / div);
     let grey = r.eq(g) & g.eq(b);
     // The brightest channel `i` (the last of equals, as `RGB2Spec::fetch` picks it) and the
     // two after it, cyclically.
-    let one = l.splat_i32(1);
     let g_top = g.ge(r);
-    let (mut x, mut y, mut i) = (
-        g_top.select(b, g),
-        g_top.select(r, b),
-        g_top.select_i32(one, l.splat_i32(0)),
-    );
     let b_top = b.ge(g_top.select(g, r));
-    x = b_top.select(r, x);
-    y = b_top.select(g, y);
-    i = b_top.select_i32(l.splat_i32(2), i);
+    let x = b_top.select(r, g_top.select(b, g));
+    let y = b_top.select(g, g_top.select(r, b));
+    let i = b_top.select_i32(
+        l.splat_i32(2),
+        g_top.select_i32(l.splat_i32(1), l.splat_i32(0)),
+    );
     let res = l.splat_i32(t.res);
     let last = l.splat_i32(t.res - 2);
     let (x, y) = (x * t.to_grid, y * t.to_grid);
@@ -253,21 +253,28 @@ pub fn emitter_lanes<L: Lanes>(l: L, rgb: [L::F32s; 3], mask: L::Mask) -> [L::F3
     let look = lit.and_not(grey);
     let idx = look.select_i32((i * res + yi) * res + xi, l.splat_i32(0));
     let next = idx + res;
-    let c = std::array::from_fn::<_, 3, _>(|k| {
-        let plane = &t.planes[k];
-        let (p00, p10) = l.gather2_near(plane, idx);
-        let (p01, p11) = l.gather2_near(plane, next);
-        let v = (p00 * x0 + p10 * x1) * y0 + (p01 * x0 + p11 * x1) * y1;
-        // A grey is the constant 1/2 (all zero); black the constant 0.
-        let black = mask.and_not(lit);
-        let v = look.select(v, zero);
-        if k == 2 {
-            black.select(l.splat(-SATURATED), v)
-        } else {
-            v
-        }
-    });
-    [c[0], c[1], c[2], scale]
+    let w = [x0, x1, y0, y1];
+    let c0 = look.select(bilinear(l, &t.planes[0], idx, next, w), zero);
+    let c1 = look.select(bilinear(l, &t.planes[1], idx, next, w), zero);
+    let c2 = look.select(bilinear(l, &t.planes[2], idx, next, w), zero);
+    // A grey is the constant 1/2 (all zero); black the constant 0.
+    let c2 = mask.and_not(lit).select(l.splat(-SATURATED), c2);
+    [c0, c1, c2, scale]
+}
+
+/// The plane's bilinear interpolation between the nodes `idx`, `idx + 1` (row `y`) and
+/// `next`, `next + 1` (row `y + 1`), weights `[x0, x1, y0, y1]`.
+#[inline(always)]
+fn bilinear<L: Lanes>(
+    l: L,
+    plane: &[f32],
+    idx: L::I32s,
+    next: L::I32s,
+    w: [L::F32s; 4],
+) -> L::F32s {
+    let (p00, p10) = l.gather2_near(plane, idx);
+    let (p01, p11) = l.gather2_near(plane, next);
+    (p00 * w[0] + p10 * w[1]) * w[2] + (p01 * w[0] + p11 * w[1]) * w[3]
 }
 
 /// The RGB a reflectance gives back once upsampled, lit by the display's white and seen by
