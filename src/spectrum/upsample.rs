@@ -374,12 +374,13 @@ mod tests {
     }
 
     /// The blended slice against `RGB2Spec::fetch`'s trilinear lookup, over colours of every
-    /// brightest channel and on the slice's edges.
+    /// brightest channel and on the slice's edges: it prints the largest difference
+    /// ([`HALF_SHAPE_ERROR`] cites it).
     #[test]
     fn emitter_shapes_are_the_tables_within_rounding() {
         let mut rng = StdRng::seed_from_u64(13);
         let edges = (0..27).map(|k| [k % 3, k / 3 % 3, k / 9].map(|i| i as f32 / 2.0));
-        let random = (0..3000).map(|_| [rng.random(), rng.random(), rng.random()]);
+        let random = (0..300_000).map(|_| [rng.random(), rng.random(), rng.random()]);
         let mut worst = 0.0f32;
         for rgb in edges.chain(random) {
             let m: f32 = rgb[0].max(rgb[1]).max(rgb[2]);
