@@ -564,7 +564,7 @@ mod tests {
     #[test]
     fn samples_are_multiples_of_the_lights_colour() {
         let l = Scalar;
-        let y = |c: [f32; 3]| c[0] * 0.2126 + c[1] * 0.7152 + c[2] * 0.0722;
+        let y = |c: [f32; 3]| Rgbs::splat(l, c).luminance();
         let mut lit = std::collections::BTreeMap::new();
         for name in ["car", "spdemo", "glass1", "room2"] {
             let scene = crate::scene::builtin::by_name(name).unwrap();

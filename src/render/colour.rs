@@ -20,6 +20,7 @@
 //! its hero wavelength, as pbrt-v4 terminates the secondary ones; bins: one bin drawn per
 //! lane), its weight scaled by the number of wavelengths it dropped to stay unbiased.
 
+use coherent_simd::scalar::Scalar;
 use coherent_simd::{Backend, Lanes, MAX_LANES, Rgbs, SimdF32, SimdI32, SimdMask};
 use smallvec::SmallVec;
 
@@ -336,7 +337,8 @@ impl Spectra {
             }
         };
         let upsampled = |c: [f32; 3]| {
-            let y = c[0] * 0.2126 + c[1] * 0.7152 + c[2] * 0.0722;
+            // The luminance a sample's radiance is divided by, in the same arithmetic.
+            let y = Rgbs::splat(Scalar, c).luminance();
             if !(y > 0.0 && y.is_finite()) {
                 return None;
             }
