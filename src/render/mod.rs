@@ -366,9 +366,14 @@ impl<'s, A: Accel> Renderer<'s, A> {
             return;
         }
 
-        let surf = self
-            .geometry
-            .surface(l, &hits, &seg.rays.origin, &dir, &seg.diff);
+        let surf = stage(
+            l,
+            #[inline(always)]
+            |l| {
+                self.geometry
+                    .surface(l, &hits, &seg.rays.origin, &dir, &seg.diff)
+            },
+        );
         let wo = -dir;
         // Opaque surfaces are two-sided: their normals face the viewer. Transmissive ones
         // keep their orientation (outward), so `wo` below tells a ray leaving the medium.
@@ -415,7 +420,11 @@ impl<'s, A: Accel> Renderer<'s, A> {
         if let Indirect::Map(map) = &self.indirect {
             let e = map.irradiance(l, hits.inst, hits.prim, hits.u, hits.v, hit);
             let f = albedo.scale(l.splat(std::f32::consts::FRAC_1_PI));
-            lit.add_reflected(l, t, &w, hit, f, e, None);
+            stage(
+                l,
+                #[inline(always)]
+                |l| lit.add_reflected(l, t, &w, hit, f, e, None),
+            );
         }
         clock.lap(stats, Stage::Shading);
 
@@ -433,13 +442,21 @@ impl<'s, A: Accel> Renderer<'s, A> {
         if let Indirect::Path { max_bounces } = self.indirect
             && seg.bounces < max_bounces
         {
-            self.spawn_diffuse(l, t, &w, seg, &surf, &ns, &ng, &albedo, hit, pending);
+            stage(
+                l,
+                #[inline(always)]
+                |l| self.spawn_diffuse(l, t, &w, seg, &surf, &ns, &ng, &albedo, hit, pending),
+            );
         }
         if seg.depth >= self.depth {
             clock.lap(stats, Stage::Other);
             return;
         }
-        self.spawn_secondaries(l, t, &w, seg, &surf, &ns, &ng, &base, hit, pending);
+        stage(
+            l,
+            #[inline(always)]
+            |l| self.spawn_secondaries(l, t, &w, seg, &surf, &ns, &ng, &base, hit, pending),
+        );
         clock.lap(stats, Stage::Other);
     }
 
@@ -472,7 +489,11 @@ impl<'s, A: Accel> Renderer<'s, A> {
                     rng::uniform(l, seg.light_ids, stream),
                     rng::uniform(l, seg.light_ids, stream ^ 0x5555_5555),
                 ];
-                let ls = light.sample(l, &surf.p, ns, can_light, k, u);
+                let ls = stage(
+                    l,
+                    #[inline(always)]
+                    |l| light.sample(l, &surf.p, ns, can_light, k, u),
+                );
                 let on = ls.active & can_light;
                 if on.none() {
                     clock.lap(stats, Stage::Lights);
@@ -505,7 +526,11 @@ impl<'s, A: Accel> Renderer<'s, A> {
                     ctx.active = visible;
                     self.shade_materials(l, ctx, None, &ls.wi, stats).reflected
                 };
-                lit.add_reflected(l, t, w, visible, reflected, ls.li, Some(li));
+                stage(
+                    l,
+                    #[inline(always)]
+                    |l| lit.add_reflected(l, t, w, visible, reflected, ls.li, Some(li)),
+                );
                 clock.lap(stats, Stage::Shading);
             }
         }
@@ -629,6 +654,23 @@ impl<'s, A: Accel> Renderer<'s, A> {
         wi: &Vec3s<L>,
         stats: &mut RenderStats,
     ) -> Shading<L> {
+        stage(
+            l,
+            #[inline(always)]
+            |l| self.shade_materials_in(l, ctx, surf, wi, stats),
+        )
+    }
+
+    /// [`Renderer::shade_materials`] inside its [`stage`].
+    #[inline(always)]
+    fn shade_materials_in<L: Lanes>(
+        &self,
+        l: L,
+        ctx: &mut ShadeHits<L>,
+        surf: Option<&Surface<L>>,
+        wi: &Vec3s<L>,
+        stats: &mut RenderStats,
+    ) -> Shading<L> {
         let mut out = Shading::zero(l);
         let mut todo = ctx.active;
         if todo.any() {
@@ -659,6 +701,25 @@ impl<'s, A: Accel> Renderer<'s, A> {
         }
         out
     }
+}
+
+/// Runs one stage of the frame kernel (shading, a light's sample, the reflected light, the
+/// secondary rays) on the lanes `l`. In optimised builds it is inlined, and the kernel that
+/// `reproduce` measures is one function per backend. In builds with debug assertions (the
+/// test profile) each stage is a function of its own per backend ([`Lanes::apart`]): the
+/// whole kernel as one function per backend and colour form was most of the test build's
+/// time on 2 cores (docs/architecture.md, "One renderer per backend").
+#[cfg(debug_assertions)]
+#[inline(always)]
+fn stage<L: Lanes, R>(l: L, f: impl FnOnce(L) -> R) -> R {
+    l.apart(f)
+}
+
+/// See the definition above: inline, the kernel as measured.
+#[cfg(not(debug_assertions))]
+#[inline(always)]
+fn stage<L: Lanes, R>(l: L, f: impl FnOnce(L) -> R) -> R {
+    f(l)
 }
 
 /// Refracts unit directions `dir` at surfaces with unit outward normals `n` into a medium of
