@@ -10,8 +10,8 @@
 //! (each contender one frame per round); the time to a first image is our accelerator's
 //! build plus our first frame, and Mitsuba's scene load plus its first frame (the JIT
 //! compiles its kernels there; the import of the Python modules is recorded apart). Rays per
-//! second count the rays our renderer traces for the same frame (camera and shadow rays),
-//! for both. Agreement: both at the same samples per pixel, converged, as mean radiance and
+//! second count our frame's primary samples (the film's count: the pixels' samples and the
+//! pre-render's corners, no shadow rays), for both. Agreement: both at the same samples per pixel, converged, as mean radiance and
 //! PSNR of the images tone-mapped alike (peak 1).
 
 use std::collections::BTreeMap;

@@ -213,8 +213,8 @@ mod tests {
         }
         let md = report::report(&ctx).unwrap().unwrap();
         for row in [
-            "| cornell | sorted >= 1.5x packets, generations 2 on (bsp, avx512) | met |",
-            "| room2 | sorted >= 1.5x packets, generations 2 on (bsp, avx512) | not met |",
+            "| cornell | sorted >= 1.5x packets, generation 1 on (bsp, avx512) | met |",
+            "| room2 | sorted >= 1.5x packets, generation 1 on (bsp, avx512) | not met |",
             "| cornell | error slope -0.5 within 20% | met |",
             "| room2 | error slope -0.5 within 20% | not met |",
             "| cornell | imap frame <= 1.5x direct | met |",
