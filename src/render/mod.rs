@@ -657,49 +657,38 @@ impl<'s, A: Accel> Renderer<'s, A> {
         stage(
             l,
             #[inline(always)]
-            |l| self.shade_materials_in(l, ctx, surf, wi, stats),
+            |l| {
+                let mut out = Shading::zero(l);
+                let mut todo = ctx.active;
+                if todo.any() {
+                    stats.materials.packets += 1;
+                }
+                while todo.any() {
+                    let id = ctx.material.lane(todo.bitmask().trailing_zeros() as usize);
+                    let mine = todo & ctx.material.eq(l.splat_i32(id));
+                    let m = &self.scene.materials[id as usize];
+                    if let (Some(surf), Some(tex)) = (surf, &m.texture) {
+                        let levels = tex.levels();
+                        let lod = lod_from_differentials(
+                            l,
+                            surf.ds_dx,
+                            surf.dt_dx,
+                            surf.ds_dy,
+                            surf.dt_dy,
+                            levels[0].width,
+                            levels[0].height,
+                            levels.len() - 1,
+                        );
+                        ctx.lod = mine.select(lod, ctx.lod);
+                    }
+                    let s = m.shade(l, ctx, wi);
+                    out = Shading::select(mine, s, out);
+                    todo = todo.and_not(mine);
+                    stats.materials.passes += 1;
+                }
+                out
+            },
         )
-    }
-
-    /// [`Renderer::shade_materials`] inside its [`stage`].
-    #[inline(always)]
-    fn shade_materials_in<L: Lanes>(
-        &self,
-        l: L,
-        ctx: &mut ShadeHits<L>,
-        surf: Option<&Surface<L>>,
-        wi: &Vec3s<L>,
-        stats: &mut RenderStats,
-    ) -> Shading<L> {
-        let mut out = Shading::zero(l);
-        let mut todo = ctx.active;
-        if todo.any() {
-            stats.materials.packets += 1;
-        }
-        while todo.any() {
-            let id = ctx.material.lane(todo.bitmask().trailing_zeros() as usize);
-            let mine = todo & ctx.material.eq(l.splat_i32(id));
-            let m = &self.scene.materials[id as usize];
-            if let (Some(surf), Some(tex)) = (surf, &m.texture) {
-                let levels = tex.levels();
-                let lod = lod_from_differentials(
-                    l,
-                    surf.ds_dx,
-                    surf.dt_dx,
-                    surf.ds_dy,
-                    surf.dt_dy,
-                    levels[0].width,
-                    levels[0].height,
-                    levels.len() - 1,
-                );
-                ctx.lod = mine.select(lod, ctx.lod);
-            }
-            let s = m.shade(l, ctx, wi);
-            out = Shading::select(mine, s, out);
-            todo = todo.and_not(mine);
-            stats.materials.passes += 1;
-        }
-        out
     }
 }
 
