@@ -66,6 +66,31 @@ pub use indirect::{Indirect, IndirectMode};
 pub use light_samples::LightSamples;
 pub use packets::Packets;
 use stats::StageClock;
+
+/// One stage of the frame kernel (the material passes, a light's sample, the reflected light,
+/// the hit's surface, the secondary packets): `stage!(l, expr)` evaluates `expr` on the lanes
+/// `l`. In optimised builds it is `expr` itself, so the kernel that `reproduce` measures is
+/// one function per backend, as written. In builds with debug assertions (the test profile)
+/// each stage is a function of its own per backend (`Lanes::apart`), which shortens the test
+/// build (docs/architecture.md, "One renderer per backend"). A macro, not a function taking
+/// a closure, so that the optimised build's code is exactly the inline expression.
+#[cfg(debug_assertions)]
+macro_rules! stage {
+    ($l:ident, $e:expr $(,)?) => {
+        $l.apart(
+            #[inline(always)]
+            |$l| $e,
+        )
+    };
+}
+
+/// See the definition above: the expression itself, the kernel as measured.
+#[cfg(not(debug_assertions))]
+macro_rules! stage {
+    ($l:ident, $e:expr $(,)?) => {
+        $e
+    };
+}
 pub use stats::{LaneCount, RayKind, RenderStats, Stage};
 pub use surface::{Differentials, Geometry, Surface};
 
@@ -366,14 +391,10 @@ impl<'s, A: Accel> Renderer<'s, A> {
             return;
         }
 
-        let surf = stage(
-            l,
-            #[inline(always)]
-            |l| {
-                self.geometry
-                    .surface(l, &hits, &seg.rays.origin, &dir, &seg.diff)
-            },
-        );
+        let surf = stage!(l, {
+            self.geometry
+                .surface(l, &hits, &seg.rays.origin, &dir, &seg.diff)
+        });
         let wo = -dir;
         // Opaque surfaces are two-sided: their normals face the viewer. Transmissive ones
         // keep their orientation (outward), so `wo` below tells a ray leaving the medium.
@@ -420,11 +441,7 @@ impl<'s, A: Accel> Renderer<'s, A> {
         if let Indirect::Map(map) = &self.indirect {
             let e = map.irradiance(l, hits.inst, hits.prim, hits.u, hits.v, hit);
             let f = albedo.scale(l.splat(std::f32::consts::FRAC_1_PI));
-            stage(
-                l,
-                #[inline(always)]
-                |l| lit.add_reflected(l, t, &w, hit, f, e, None),
-            );
+            stage!(l, lit.add_reflected(l, t, &w, hit, f, e, None));
         }
         clock.lap(stats, Stage::Shading);
 
@@ -442,20 +459,18 @@ impl<'s, A: Accel> Renderer<'s, A> {
         if let Indirect::Path { max_bounces } = self.indirect
             && seg.bounces < max_bounces
         {
-            stage(
+            stage!(
                 l,
-                #[inline(always)]
-                |l| self.spawn_diffuse(l, t, &w, seg, &surf, &ns, &ng, &albedo, hit, pending),
+                self.spawn_diffuse(l, t, &w, seg, &surf, &ns, &ng, &albedo, hit, pending),
             );
         }
         if seg.depth >= self.depth {
             clock.lap(stats, Stage::Other);
             return;
         }
-        stage(
+        stage!(
             l,
-            #[inline(always)]
-            |l| self.spawn_secondaries(l, t, &w, seg, &surf, &ns, &ng, &base, hit, pending),
+            self.spawn_secondaries(l, t, &w, seg, &surf, &ns, &ng, &base, hit, pending),
         );
         clock.lap(stats, Stage::Other);
     }
@@ -489,11 +504,7 @@ impl<'s, A: Accel> Renderer<'s, A> {
                     rng::uniform(l, seg.light_ids, stream),
                     rng::uniform(l, seg.light_ids, stream ^ 0x5555_5555),
                 ];
-                let ls = stage(
-                    l,
-                    #[inline(always)]
-                    |l| light.sample(l, &surf.p, ns, can_light, k, u),
-                );
+                let ls = stage!(l, light.sample(l, &surf.p, ns, can_light, k, u));
                 let on = ls.active & can_light;
                 if on.none() {
                     clock.lap(stats, Stage::Lights);
@@ -526,10 +537,9 @@ impl<'s, A: Accel> Renderer<'s, A> {
                     ctx.active = visible;
                     self.shade_materials(l, ctx, None, &ls.wi, stats).reflected
                 };
-                stage(
+                stage!(
                     l,
-                    #[inline(always)]
-                    |l| lit.add_reflected(l, t, w, visible, reflected, ls.li, Some(li)),
+                    lit.add_reflected(l, t, w, visible, reflected, ls.li, Some(li)),
                 );
                 clock.lap(stats, Stage::Shading);
             }
@@ -654,61 +664,38 @@ impl<'s, A: Accel> Renderer<'s, A> {
         wi: &Vec3s<L>,
         stats: &mut RenderStats,
     ) -> Shading<L> {
-        stage(
-            l,
-            #[inline(always)]
-            |l| {
-                let mut out = Shading::zero(l);
-                let mut todo = ctx.active;
-                if todo.any() {
-                    stats.materials.packets += 1;
+        stage!(l, {
+            let mut out = Shading::zero(l);
+            let mut todo = ctx.active;
+            if todo.any() {
+                stats.materials.packets += 1;
+            }
+            while todo.any() {
+                let id = ctx.material.lane(todo.bitmask().trailing_zeros() as usize);
+                let mine = todo & ctx.material.eq(l.splat_i32(id));
+                let m = &self.scene.materials[id as usize];
+                if let (Some(surf), Some(tex)) = (surf, &m.texture) {
+                    let levels = tex.levels();
+                    let lod = lod_from_differentials(
+                        l,
+                        surf.ds_dx,
+                        surf.dt_dx,
+                        surf.ds_dy,
+                        surf.dt_dy,
+                        levels[0].width,
+                        levels[0].height,
+                        levels.len() - 1,
+                    );
+                    ctx.lod = mine.select(lod, ctx.lod);
                 }
-                while todo.any() {
-                    let id = ctx.material.lane(todo.bitmask().trailing_zeros() as usize);
-                    let mine = todo & ctx.material.eq(l.splat_i32(id));
-                    let m = &self.scene.materials[id as usize];
-                    if let (Some(surf), Some(tex)) = (surf, &m.texture) {
-                        let levels = tex.levels();
-                        let lod = lod_from_differentials(
-                            l,
-                            surf.ds_dx,
-                            surf.dt_dx,
-                            surf.ds_dy,
-                            surf.dt_dy,
-                            levels[0].width,
-                            levels[0].height,
-                            levels.len() - 1,
-                        );
-                        ctx.lod = mine.select(lod, ctx.lod);
-                    }
-                    let s = m.shade(l, ctx, wi);
-                    out = Shading::select(mine, s, out);
-                    todo = todo.and_not(mine);
-                    stats.materials.passes += 1;
-                }
-                out
-            },
-        )
+                let s = m.shade(l, ctx, wi);
+                out = Shading::select(mine, s, out);
+                todo = todo.and_not(mine);
+                stats.materials.passes += 1;
+            }
+            out
+        })
     }
-}
-
-/// Runs one stage of the frame kernel (shading, a light's sample, the reflected light, the
-/// secondary rays) on the lanes `l`. In optimised builds it is inlined, and the kernel that
-/// `reproduce` measures is one function per backend. In builds with debug assertions (the
-/// test profile) each stage is a function of its own per backend ([`Lanes::apart`]): the
-/// whole kernel as one function per backend and colour form was most of the test build's
-/// time on 2 cores (docs/architecture.md, "One renderer per backend").
-#[cfg(debug_assertions)]
-#[inline(always)]
-fn stage<L: Lanes, R>(l: L, f: impl FnOnce(L) -> R) -> R {
-    l.apart(f)
-}
-
-/// See the definition above: inline, the kernel as measured.
-#[cfg(not(debug_assertions))]
-#[inline(always)]
-fn stage<L: Lanes, R>(l: L, f: impl FnOnce(L) -> R) -> R {
-    f(l)
 }
 
 /// Refracts unit directions `dir` at surfaces with unit outward normals `n` into a medium of
