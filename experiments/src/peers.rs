@@ -11,8 +11,8 @@
 //! build plus our first frame, and Mitsuba's scene load plus its first frame (the JIT
 //! compiles its kernels there; the import of the Python modules is recorded apart). Rays per
 //! second count our frame's primary samples (the film's count: the pixels' samples and the
-//! pre-render's corners, no shadow rays), for both. Agreement: both at the same samples per pixel, converged, as mean radiance and
-//! PSNR of the images tone-mapped alike (peak 1).
+//! pre-render's corners, no shadow rays), for both. Agreement: both at the same samples per
+//! pixel, converged, as mean radiance and PSNR of the images tone-mapped alike (peak 1).
 
 use std::collections::BTreeMap;
 

@@ -66,6 +66,8 @@ pub use indirect::{Indirect, IndirectMode};
 pub use light_samples::LightSamples;
 pub use packets::Packets;
 use stats::StageClock;
+pub use stats::{LaneCount, RayKind, RenderStats, Stage};
+pub use surface::{Differentials, Geometry, Surface};
 
 /// One stage of the frame kernel (the material passes, a light's sample, the reflected light,
 /// the hit's surface, the secondary packets): `stage!(l, expr)` evaluates `expr` on the lanes
@@ -91,8 +93,6 @@ macro_rules! stage {
         $e
     };
 }
-pub use stats::{LaneCount, RayKind, RenderStats, Stage};
-pub use surface::{Differentials, Geometry, Surface};
 
 /// The renderer of one scene with one accelerator, for one image size.
 pub struct Renderer<'s, A: Accel> {
